@@ -1,0 +1,24 @@
+"""Language models behind one interface: text in, text out, with metadata.
+
+Nothing here knows about tables or planning.
+"""
+
+from llm_grop.llm.base import (
+    LLM,
+    BackendOptions,
+    CallLog,
+    SamplingParams,
+    available_backends,
+    create_llm,
+    register_backend,
+)
+
+__all__ = [
+    "LLM",
+    "BackendOptions",
+    "CallLog",
+    "SamplingParams",
+    "available_backends",
+    "create_llm",
+    "register_backend",
+]

@@ -1,0 +1,128 @@
+"""The LLM protocol, its options, the backend registry and the call log."""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Protocol, runtime_checkable
+
+from llm_grop.errors import BadInput
+from llm_grop.world.llmlog import LLMCallRecord
+
+
+@dataclass(frozen=True)
+class SamplingParams:
+    """Decoding settings. Defaults are the paper's Table II hyperparameters.
+
+    ``seed`` makes a call repeatable; re-prompting resamples by changing it.
+    """
+
+    temperature: float = 0.1
+    top_p: float = 1.0
+    max_tokens: int = 512
+    frequency_penalty: float = 0.0
+    presence_penalty: float = 0.0
+    seed: int | None = None
+
+    def with_seed(self, seed: int | None) -> SamplingParams:
+        """A copy with another seed."""
+        return replace(self, seed=seed)
+
+
+@dataclass(frozen=True)
+class BackendOptions:
+    """How to build a backend.
+
+    ``model``: model name (openai) or GGUF path (embedded); ``None`` for the default.
+    ``base_url``/``api_key``: for openai (default: ``OPENAI_BASE_URL``/``OPENAI_API_KEY``).
+    ``timeout_s``: per-request timeout in seconds. ``max_retries``: retries with
+    exponential backoff on transient errors (connection, 429, 5xx).
+    ``replay_path``: the JSONL file the replay backend reads.
+    ``n_threads``: CPU threads for the embedded model (``None``: all cores).
+    """
+
+    model: str | None = None
+    base_url: str | None = None
+    api_key: str | None = None
+    timeout_s: float = 60.0
+    max_retries: int = 3
+    replay_path: Path | None = None
+    n_threads: int | None = None
+
+
+@runtime_checkable
+class LLM(Protocol):
+    """A text-completion model.
+
+    ``complete`` sends ``prompt`` as one user message and returns the call's record.
+    ``grammar`` is an optional GBNF grammar that constrains the output; backends
+    that cannot enforce one ignore it.
+    """
+
+    backend: str
+    model: str
+
+    def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
+                 ) -> LLMCallRecord: ...
+
+
+#: Backend name -> "module:factory"; factories take :class:`BackendOptions`.
+_REGISTRY: dict[str, str | Callable[[BackendOptions], LLM]] = {
+    "embedded": "llm_grop.llm.embedded:EmbeddedLLM",
+    "openai": "llm_grop.llm.openai_backend:OpenAILLM",
+    "replay": "llm_grop.llm.replay:ReplayLLM",
+}
+
+
+def register_backend(name: str, factory: Callable[[BackendOptions], LLM]) -> None:
+    """Add a backend, selectable as ``--llm NAME``."""
+    _REGISTRY[name] = factory
+
+
+def available_backends() -> list[str]:
+    """Names of every registered backend."""
+    return sorted(_REGISTRY)
+
+
+def create_llm(name: str, options: BackendOptions | None = None) -> LLM:
+    """Build the backend registered as ``name``; its heavy imports happen only here."""
+    if name not in _REGISTRY:
+        raise BadInput(f"--llm: unknown backend {name!r}; choose from {', '.join(available_backends())}")
+    factory = _REGISTRY[name]
+    if isinstance(factory, str):
+        module, _, attr = factory.partition(":")
+        factory = getattr(importlib.import_module(module), attr)
+    return factory(options or BackendOptions())
+
+
+@dataclass
+class CallLog:
+    """Wraps an :class:`LLM`, keeping every call and appending it to a record file.
+
+    The record file is JSONL (one call a line, flushed at once, so an interrupted
+    run loses no call); the replay backend reads it back.
+    """
+
+    llm: LLM
+    record_path: Path | None = None
+    calls: list[LLMCallRecord] = field(default_factory=list)
+
+    @property
+    def backend(self) -> str:
+        return self.llm.backend
+
+    @property
+    def model(self) -> str:
+        return self.llm.model
+
+    def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
+                 ) -> LLMCallRecord:
+        record = self.llm.complete(prompt, params, grammar)
+        self.calls.append(record)
+        if self.record_path is not None:
+            from llm_grop.llm.replay import append_record
+
+            append_record(self.record_path, record)
+        return record

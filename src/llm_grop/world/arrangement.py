@@ -1,0 +1,75 @@
+"""Where objects stand on the table: placements, configurations, arrangements."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from llm_grop.world.catalog import ObjectSpec
+from llm_grop.world.llmlog import LLMSummary
+from llm_grop.world.relation import Relation
+from llm_grop.world.table import Table
+
+
+@dataclass(frozen=True)
+class Item:
+    """One requested object: an instance ``name`` of catalog kind ``spec``.
+
+    The first instance of a kind is named after it ("dinner fork"); further ones
+    get a number ("dinner fork 2").
+    """
+
+    name: str
+    spec: ObjectSpec
+
+    @property
+    def kind(self) -> str:
+        """The catalog name of this item's kind."""
+        return self.spec.name
+
+
+@dataclass(frozen=True)
+class Placement:
+    """An object on the table, in the table frame.
+
+    ``x``, ``y`` in metres; ``yaw`` in radians (object frame -> table frame,
+    counter-clockwise); ``size`` is the footprint ``(sx, sy)`` in metres in the
+    object's own frame; ``on`` names the object it rests on (``None``: the table).
+    """
+
+    name: str
+    x: float
+    y: float
+    yaw: float
+    shape: Literal["circle", "box"]
+    size: tuple[float, float]
+    on: str | None = None
+    kind: str = ""
+    height: float = 0.0
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One feasible set of placements for every item (a sample of the sampler)."""
+
+    placements: tuple[Placement, ...]
+
+    def by_name(self) -> dict[str, Placement]:
+        """Placements keyed by object name."""
+        return {p.name: p for p in self.placements}
+
+
+@dataclass(frozen=True)
+class Arrangement:
+    """The contract's arrangement: a table, placed objects and the relations they keep.
+
+    ``warnings`` and ``conflicts`` record what the pipeline dropped or re-prompted.
+    """
+
+    request: str
+    table: Table
+    placements: tuple[Placement, ...]
+    relations: tuple[Relation, ...] = ()
+    llm: LLMSummary | None = None
+    warnings: tuple[str, ...] = ()
+    conflicts: tuple[tuple[Relation, ...], ...] = field(default=())

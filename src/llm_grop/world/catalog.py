@@ -1,0 +1,211 @@
+"""The object catalog: shapes, footprints, heights and synonyms of table objects.
+
+The package ships ``data/catalog.yaml``; users extend it with files of their own
+(same layout), which may add objects or override packaged ones by name.
+"""
+
+from __future__ import annotations
+
+import difflib
+import os
+import re
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from llm_grop.errors import CatalogError, UnknownObject
+
+#: Environment variable holding extra catalog files, separated by ``os.pathsep``.
+CATALOG_ENV = "LLM_GROP_CATALOG"
+
+_ARTICLES = re.compile(r"^(?:the|a|an|one|some|another)\s+")
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    """A kind of table object.
+
+    ``size`` is the footprint ``(sx, sy)`` in metres in the object's own frame;
+    ``height`` is in metres. ``shape`` is ``"circle"`` (then ``sx == sy`` is the
+    diameter) or ``"box"``.
+    """
+
+    name: str
+    shape: Literal["circle", "box"]
+    size: tuple[float, float]
+    height: float
+    synonyms: tuple[str, ...] = ()
+
+    @property
+    def area(self) -> float:
+        """Footprint area in square metres."""
+        sx, sy = self.size
+        return 3.141592653589793 * sx * sx / 4 if self.shape == "circle" else sx * sy
+
+
+class _ObjectModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(min_length=1)
+    shape: Literal["circle", "box"]
+    size: tuple[float, float]
+    height: float = Field(gt=0)
+    synonyms: list[str] = []
+
+    @field_validator("size")
+    @classmethod
+    def _positive(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if v[0] <= 0 or v[1] <= 0:
+            raise ValueError("size must be positive")
+        return v
+
+
+class _CatalogModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    objects: list[_ObjectModel]
+
+
+def normalize_name(text: str) -> str:
+    """Lower case, single spaces, no leading article or trailing punctuation."""
+    text = re.sub(r"[^a-z0-9' -]+", " ", text.lower().replace("-", " "))
+    text = re.sub(r"\s+", " ", text).strip(" '")
+    return _ARTICLES.sub("", text)
+
+
+def singular_forms(name: str) -> list[str]:
+    """``name`` and the singular forms its last word might have (knives -> knife)."""
+    head, _, last = name.rpartition(" ")
+    prefix = f"{head} " if head else ""
+    forms = [name]
+    if last.endswith("ies") and len(last) > 4:
+        forms.append(prefix + last[:-3] + "y")
+    if last.endswith("ves"):
+        forms += [prefix + last[:-3] + "fe", prefix + last[:-3] + "f"]
+    if last.endswith("es"):
+        forms.append(prefix + last[:-2])
+    if last.endswith("s") and not last.endswith("ss"):
+        forms.append(prefix + last[:-1])
+    return forms
+
+
+class Catalog:
+    """An immutable set of :class:`ObjectSpec`, looked up by name, synonym or plural."""
+
+    def __init__(self, specs: Iterable[ObjectSpec]) -> None:
+        self._specs: dict[str, ObjectSpec] = {}
+        for spec in specs:
+            self._specs[spec.name] = spec
+        self._aliases: dict[str, str] = {}
+        for spec in self._specs.values():
+            for alias in spec.synonyms:
+                self._aliases.setdefault(normalize_name(alias), spec.name)
+        for name in self._specs:
+            self._aliases[name] = name
+
+    @classmethod
+    def load(cls, extra_files: Sequence[str | os.PathLike[str]] = (), *, use_env: bool = True
+             ) -> Catalog:
+        """The packaged catalog, extended by ``extra_files`` and ``$LLM_GROP_CATALOG``."""
+        packaged = resources.files("llm_grop").joinpath("data/catalog.yaml")
+        specs = _parse(packaged.read_text(encoding="utf-8"), "packaged catalog")
+        files = list(extra_files)
+        if use_env and os.environ.get(CATALOG_ENV):
+            files = [p for p in os.environ[CATALOG_ENV].split(os.pathsep) if p] + files
+        for path in files:
+            try:
+                text = Path(path).read_text(encoding="utf-8")
+            except OSError as exc:
+                raise CatalogError(f"catalog {path}: cannot read ({exc.strerror})") from None
+            specs += _parse(text, f"catalog {path}")
+        return cls(specs)
+
+    @property
+    def specs(self) -> Mapping[str, ObjectSpec]:
+        """Every spec by canonical name."""
+        return dict(self._specs)
+
+    def names(self) -> list[str]:
+        """Canonical names, sorted."""
+        return sorted(self._specs)
+
+    def aliases(self) -> Mapping[str, str]:
+        """Every known name or synonym (normalised) -> canonical name."""
+        return dict(self._aliases)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and self.lookup(name) is not None
+
+    def __len__(self) -> int:
+        return len(self._specs)
+
+    def lookup(self, text: str) -> ObjectSpec | None:
+        """The spec that ``text`` names (canonical, synonym or plural), else ``None``."""
+        for form in singular_forms(normalize_name(text)):
+            if form in self._aliases:
+                return self._specs[self._aliases[form]]
+        return None
+
+    def suggest(self, text: str, n: int = 3) -> list[str]:
+        """The canonical names closest to ``text``, best first."""
+        close = difflib.get_close_matches(normalize_name(text), list(self._aliases), n=n * 2,
+                                          cutoff=0.5)
+        out: list[str] = []
+        for alias in close:
+            name = self._aliases[alias]
+            if name not in out:
+                out.append(name)
+        return out[:n]
+
+    def resolve(self, text: str, where: str = "request") -> ObjectSpec:
+        """Like :meth:`lookup`, but raises :class:`UnknownObject` with suggestions."""
+        spec = self.lookup(text)
+        if spec is None:
+            raise UnknownObject(normalize_name(text) or text, self.suggest(text), where)
+        return spec
+
+
+def _parse(text: str, where: str) -> list[ObjectSpec]:
+    try:
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" line {mark.line + 1}" if mark is not None else ""
+        raise CatalogError(f"{where}{at}: not valid YAML") from None
+    try:
+        model = _CatalogModel.model_validate(raw)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = _location(raw, err["loc"])
+        raise CatalogError(f"{where}: {loc}: {err['msg']}") from None
+    specs = []
+    for obj in model.objects:
+        name = normalize_name(obj.name)
+        if obj.shape == "circle" and abs(obj.size[0] - obj.size[1]) > 1e-9:
+            raise CatalogError(f"{where}: object {name!r}: a circle needs size [d, d]")
+        specs.append(ObjectSpec(name, obj.shape, (float(obj.size[0]), float(obj.size[1])),
+                                float(obj.height), tuple(obj.synonyms)))
+    return specs
+
+
+def _location(raw: object, loc: tuple[int | str, ...]) -> str:
+    """A readable path such as ``objects[2] ('mug').size`` for a validation error."""
+    parts: list[str] = []
+    node = raw
+    for key in loc:
+        if isinstance(key, int):
+            label = f"[{key}]"
+            if isinstance(node, list) and key < len(node):
+                node = node[key]
+                if isinstance(node, dict) and "name" in node:
+                    label += f" ({node['name']!r})"
+            parts.append(label)
+        else:
+            parts.append(f".{key}" if parts else str(key))
+            node = node.get(key) if isinstance(node, dict) else None
+    return "".join(parts) or "top level"
