@@ -89,7 +89,8 @@ def available_backends() -> list[str]:
 def create_llm(name: str, options: BackendOptions | None = None) -> LLM:
     """Build the backend registered as ``name``; its heavy imports happen only here."""
     if name not in _REGISTRY:
-        raise BadInput(f"--llm: unknown backend {name!r}; choose from {', '.join(available_backends())}")
+        choices = ", ".join(available_backends())
+        raise BadInput(f"--llm: unknown backend {name!r}; choose from {choices}")
     factory = _REGISTRY[name]
     if isinstance(factory, str):
         module, _, attr = factory.partition(":")

@@ -1,8 +1,8 @@
 """The world: objects, tables, relations and arrangements. Representation only."""
 
 from llm_grop.world.arrangement import Arrangement, Configuration, Item, Placement
-from llm_grop.world.llmlog import LLMCallRecord, LLMSummary
 from llm_grop.world.catalog import Catalog, ObjectSpec
+from llm_grop.world.llmlog import LLMCallRecord, LLMSummary
 from llm_grop.world.relation import RELATION_NAMES, Relation
 from llm_grop.world.table import Table
 

@@ -7,6 +7,7 @@ The package ships ``data/catalog.yaml``; users extend it with files of their own
 from __future__ import annotations
 
 import difflib
+import math
 import os
 import re
 from collections.abc import Iterable, Mapping, Sequence
@@ -54,14 +55,14 @@ class _ObjectModel(BaseModel):
     name: str = Field(min_length=1)
     shape: Literal["circle", "box"]
     size: tuple[float, float]
-    height: float = Field(gt=0)
+    height: float = Field(gt=0, allow_inf_nan=False)
     synonyms: list[str] = []
 
     @field_validator("size")
     @classmethod
     def _positive(cls, v: tuple[float, float]) -> tuple[float, float]:
-        if v[0] <= 0 or v[1] <= 0:
-            raise ValueError("size must be positive")
+        if not all(math.isfinite(s) and s > 0 for s in v):
+            raise ValueError("size must be positive and finite")
         return v
 
 
@@ -177,6 +178,8 @@ def _parse(text: str, where: str) -> list[ObjectSpec]:
         mark = getattr(exc, "problem_mark", None)
         at = f" line {mark.line + 1}" if mark is not None else ""
         raise CatalogError(f"{where}{at}: not valid YAML") from None
+    if not isinstance(raw, dict):
+        raise CatalogError(f"{where}: top level: expected a mapping with an 'objects' list")
     try:
         model = _CatalogModel.model_validate(raw)
     except ValidationError as exc:
@@ -184,10 +187,14 @@ def _parse(text: str, where: str) -> list[ObjectSpec]:
         loc = _location(raw, err["loc"])
         raise CatalogError(f"{where}: {loc}: {err['msg']}") from None
     specs = []
-    for obj in model.objects:
+    for i, obj in enumerate(model.objects):
         name = normalize_name(obj.name)
+        if not name:
+            raise CatalogError(f"{where}: objects[{i}] ({obj.name!r}).name: "
+                               "needs letters or digits")
         if obj.shape == "circle" and abs(obj.size[0] - obj.size[1]) > 1e-9:
-            raise CatalogError(f"{where}: object {name!r}: a circle needs size [d, d]")
+            raise CatalogError(f"{where}: objects[{i}] ({obj.name!r}).size: "
+                               "a circle needs size [d, d]")
         specs.append(ObjectSpec(name, obj.shape, (float(obj.size[0]), float(obj.size[1])),
                                 float(obj.height), tuple(obj.synonyms)))
     return specs

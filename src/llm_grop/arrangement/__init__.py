@@ -1,0 +1,1 @@
+"""Paper §III-A and §III-B: symbolic relations, consistency, geometry, sampling."""

@@ -1,0 +1,187 @@
+"""The ``openai`` backend: any OpenAI-compatible chat-completions endpoint.
+
+It speaks to api.openai.com or to a local server with the same API (vLLM, Ollama,
+llama.cpp server) through the official ``openai`` SDK.
+
+- Endpoint: ``BackendOptions.base_url``, else the ``OPENAI_BASE_URL`` environment
+  variable, else ``https://api.openai.com/v1`` (the SDK's own resolution).
+- API key: ``BackendOptions.api_key``, else ``OPENAI_API_KEY``, else the placeholder
+  :data:`PLACEHOLDER_API_KEY`, which local servers accept and OpenAI refuses (401).
+- Model: ``BackendOptions.model``, else :data:`DEFAULT_MODEL`.
+- Retries: the SDK itself retries connection errors, timeouts, 408, 409, 429 and
+  5xx answers up to ``max_retries`` times with exponential backoff (0.5 s doubling
+  to at most 8 s, with jitter), honouring the server's ``retry-after-ms`` and
+  ``retry-after`` headers; this module adds no retry loop of its own.
+- Grammars: chat-completions has no GBNF support, so ``grammar`` is ignored.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from typing import Any
+
+import openai
+
+from llm_grop.errors import LLMUnavailable
+from llm_grop.llm.base import BackendOptions, SamplingParams
+from llm_grop.world.llmlog import LLMCallRecord
+
+#: The model used when ``BackendOptions.model`` is ``None``.
+DEFAULT_MODEL = "gpt-4o-mini"
+
+#: The API key sent when none is configured; local servers ignore it.
+PLACEHOLDER_API_KEY = "not-needed"
+
+#: Longest server error text quoted in an error message, in characters.
+_MAX_DETAIL = 200
+
+_ERRNO_PREFIX = re.compile(r"^\[Errno -?\d+\]\s*")
+
+
+class OpenAILLM:
+    """A chat model behind an OpenAI-compatible HTTP endpoint.
+
+    ``complete`` sends the prompt as one user message. The record's ``latency_s`` is
+    the wall time of the whole request in seconds, retries and backoff included.
+    """
+
+    backend: str = "openai"
+
+    def __init__(self, options: BackendOptions) -> None:
+        self.model: str = options.model or DEFAULT_MODEL
+        api_key = options.api_key or os.environ.get("OPENAI_API_KEY") or PLACEHOLDER_API_KEY
+        self._max_retries = options.max_retries
+        self._timeout_s = options.timeout_s
+        try:
+            # base_url=None lets the SDK read OPENAI_BASE_URL.
+            self._client = openai.OpenAI(
+                base_url=options.base_url or None,
+                api_key=api_key,
+                timeout=options.timeout_s,
+                max_retries=options.max_retries,
+            )
+        except (openai.OpenAIError, ValueError, TypeError) as exc:
+            raise LLMUnavailable(f"openai backend: cannot configure the client: {_one_line(exc)}"
+                                 ) from None
+        #: The endpoint in use, without a trailing slash.
+        self.base_url: str = str(self._client.base_url).rstrip("/")
+
+    def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
+                 ) -> LLMCallRecord:
+        """Send ``prompt`` and return the call's record; ``grammar`` is ignored."""
+        kwargs: dict[str, Any] = {
+            "model": self.model,
+            "messages": [{"role": "user", "content": prompt}],
+            "temperature": params.temperature,
+            "top_p": params.top_p,
+            "max_tokens": params.max_tokens,
+            "frequency_penalty": params.frequency_penalty,
+            "presence_penalty": params.presence_penalty,
+        }
+        if params.seed is not None:
+            kwargs["seed"] = params.seed
+        start = time.perf_counter()
+        try:
+            response = self._client.chat.completions.create(**kwargs)
+        except openai.OpenAIError as exc:
+            raise self._unavailable(exc) from None
+        except ValueError as exc:
+            # The SDK lets a 200 answer whose body is not JSON through as a decode error.
+            raise LLMUnavailable(f"openai backend: unreadable answer from {self.base_url}: "
+                                 f"{_one_line(exc)}") from None
+        latency_s = time.perf_counter() - start
+        text, prompt_tokens, completion_tokens = self._read(response)
+        return LLMCallRecord(
+            backend=self.backend,
+            model=self.model,
+            prompt=prompt,
+            response=text,
+            latency_s=latency_s,
+            prompt_tokens=prompt_tokens,
+            completion_tokens=completion_tokens,
+            seed=params.seed,
+        )
+
+    def _read(self, response: Any) -> tuple[str, int | None, int | None]:
+        """The reply text and token counts; the SDK does not validate answers, so we do."""
+        try:
+            text = response.choices[0].message.content
+            if text is not None and not isinstance(text, str):
+                raise TypeError(type(text))
+        except (AttributeError, IndexError, KeyError, TypeError):
+            raise LLMUnavailable(f"openai backend: malformed answer from {self.base_url}: "
+                                 f"no text in choices[0].message.content") from None
+        usage = getattr(response, "usage", None)
+        counts = [getattr(usage, key, None) for key in ("prompt_tokens", "completion_tokens")]
+        prompt_tokens, completion_tokens = (
+            n if isinstance(n, int) and not isinstance(n, bool) else None for n in counts)
+        # A refusal or a tool call leaves content empty; an empty reply is still a reply.
+        return text or "", prompt_tokens, completion_tokens
+
+    def close(self) -> None:
+        """Close the HTTP connections; the backend is unusable afterwards."""
+        self._client.close()
+
+    def _unavailable(self, exc: openai.OpenAIError) -> LLMUnavailable:
+        """The one-line error for a failed request."""
+        where = self.base_url
+        if isinstance(exc, openai.APITimeoutError):
+            reason = f"timed out after {self._timeout_s:g} s"
+            return LLMUnavailable(f"openai backend: cannot reach {where} ({reason})"
+                                  f"{self._after_retries()}")
+        if isinstance(exc, openai.APIConnectionError):
+            return LLMUnavailable(f"openai backend: cannot reach {where} "
+                                  f"({_root_cause(exc)}){self._after_retries()}")
+        if isinstance(exc, openai.AuthenticationError):
+            return LLMUnavailable(f"openai backend: the API key was refused by {where} (401: "
+                                  f"{_detail(exc)}); set OPENAI_API_KEY or pass an api_key")
+        if isinstance(exc, openai.PermissionDeniedError):
+            return LLMUnavailable(f"openai backend: the API key may not use model {self.model!r} "
+                                  f"at {where} (403: {_detail(exc)})")
+        if isinstance(exc, openai.NotFoundError):
+            return LLMUnavailable(f"openai backend: model {self.model!r} not found at {where} "
+                                  f"(404: {_detail(exc)}); check the model name and base URL")
+        if isinstance(exc, openai.APIStatusError):
+            status = exc.status_code
+            retried = self._after_retries() if status in (408, 409, 429) or status >= 500 else ""
+            return LLMUnavailable(f"openai backend: {where} answered {status} "
+                                  f"({_detail(exc)}){retried}")
+        return LLMUnavailable(f"openai backend: unexpected answer from {where}: {_one_line(exc)}")
+
+    def _after_retries(self) -> str:
+        n = self._max_retries
+        if n == 0:
+            return " (retries disabled)"
+        return f" after {n} {'retry' if n == 1 else 'retries'}"
+
+
+def _root_cause(exc: BaseException) -> str:
+    """The innermost cause's message, e.g. ``connection refused``."""
+    inner: BaseException = exc
+    for _ in range(20):
+        nxt = inner.__cause__ or inner.__context__
+        if nxt is None:
+            break
+        inner = nxt
+    text = _ERRNO_PREFIX.sub("", _one_line(inner)) or type(inner).__name__
+    return text[:1].lower() + text[1:]
+
+
+def _detail(exc: openai.APIStatusError) -> str:
+    """The server's own error message, shortened to one line."""
+    body = exc.body
+    message: object = None
+    if isinstance(body, dict):
+        # The SDK hands over the "error" object of {"error": {"message": ...}} bodies.
+        inner = body.get("error", body)
+        message = inner.get("message") if isinstance(inner, dict) else inner
+    if not isinstance(message, str) or not message.strip():
+        message = exc.message
+    return _one_line(str(message))
+
+
+def _one_line(obj: object) -> str:
+    text = " ".join(str(obj).split())
+    return text if len(text) <= _MAX_DETAIL else text[: _MAX_DETAIL - 1] + "…"

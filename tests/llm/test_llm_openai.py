@@ -1,0 +1,183 @@
+"""The openai backend against a real local OpenAI-compatible HTTP server."""
+
+from __future__ import annotations
+
+import socket
+from collections import deque
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+import pytest
+
+from llm_grop.errors import LLMUnavailable
+from llm_grop.llm.base import BackendOptions, SamplingParams, create_llm
+from llm_grop.llm.openai_backend import DEFAULT_MODEL, PLACEHOLDER_API_KEY, OpenAILLM
+
+if TYPE_CHECKING:
+    from conftest import ChatServer
+
+PARAMS = SamplingParams(temperature=0.1, top_p=0.9, max_tokens=64, frequency_penalty=0.2,
+                        presence_penalty=0.3, seed=7)
+
+
+@pytest.fixture(autouse=True)
+def _no_ambient_openai_env(monkeypatch: pytest.MonkeyPatch) -> None:
+    for name in ("OPENAI_BASE_URL", "OPENAI_API_KEY", "OPENAI_CUSTOM_HEADERS"):
+        monkeypatch.delenv(name, raising=False)
+
+
+@pytest.fixture
+def closed_port() -> Iterator[int]:
+    """A local port that is bound but not listening, so connections are refused."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        yield sock.getsockname()[1]
+
+
+def make(server: ChatServer, **options: object) -> OpenAILLM:
+    llm = OpenAILLM(BackendOptions(base_url=server.url, **options))  # type: ignore[arg-type]
+    return llm
+
+
+def test_sends_sampling_params_and_records_the_answer(chat_server: ChatServer) -> None:
+    llm = make(chat_server, model="local-model")
+    record = llm.complete("Where does the fork go?", PARAMS)
+    body = chat_server.requests[-1]
+    assert body["model"] == "local-model"
+    assert body["messages"] == [{"role": "user", "content": "Where does the fork go?"}]
+    assert (body["temperature"], body["top_p"], body["max_tokens"]) == (0.1, 0.9, 64)
+    assert (body["frequency_penalty"], body["presence_penalty"], body["seed"]) == (0.2, 0.3, 7)
+    assert record.backend == "openai"
+    assert record.model == "local-model"
+    assert record.prompt == "Where does the fork go?"
+    assert record.response == "reply to 'Where does the fork go?' with seed 7"
+    assert (record.prompt_tokens, record.completion_tokens) == (5, 10)
+    assert record.seed == 7
+    assert record.latency_s > 0
+    llm.close()
+
+
+def test_no_seed_sends_no_seed(chat_server: ChatServer) -> None:
+    record = make(chat_server).complete("hi", SamplingParams())
+    assert "seed" not in chat_server.requests[-1]
+    assert record.seed is None
+
+
+def test_grammar_is_ignored(chat_server: ChatServer) -> None:
+    record = make(chat_server).complete("hi", PARAMS, grammar='root ::= "x"')
+    assert "grammar" not in chat_server.requests[-1]
+    assert record.response == "reply to 'hi' with seed 7"
+
+
+def test_default_model_and_placeholder_key(chat_server: ChatServer) -> None:
+    llm = make(chat_server)
+    llm.complete("hi", PARAMS)
+    assert llm.model == DEFAULT_MODEL == "gpt-4o-mini"
+    assert chat_server.requests[-1]["model"] == "gpt-4o-mini"
+    assert chat_server.headers[-1]["authorization"] == f"Bearer {PLACEHOLDER_API_KEY}"
+
+
+def test_environment_gives_base_url_and_key(chat_server: ChatServer,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("OPENAI_BASE_URL", chat_server.url)
+    monkeypatch.setenv("OPENAI_API_KEY", "sk-from-env")
+    chat_server.api_key = "sk-from-env"
+    llm = create_llm("openai", BackendOptions(model="m"))
+    assert isinstance(llm, OpenAILLM)
+    assert llm.base_url == chat_server.url
+    assert llm.complete("hi", PARAMS).response == "reply to 'hi' with seed 7"
+    assert len(chat_server.requests) == 1
+
+
+def test_option_overrides_environment(chat_server: ChatServer, closed_port: int,
+                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("OPENAI_BASE_URL", f"http://127.0.0.1:{closed_port}/v1")
+    assert make(chat_server).complete("hi", PARAMS).response.startswith("reply to")
+
+
+def test_retries_recover_from_500_and_429(chat_server: ChatServer) -> None:
+    chat_server.plan = deque([500, 429])
+    record = make(chat_server, max_retries=3).complete("hi", PARAMS)
+    assert record.response == "reply to 'hi' with seed 7"
+    assert len(chat_server.requests) == 3
+    assert all(body == chat_server.requests[0] for body in chat_server.requests)
+
+
+def test_exhausted_retries_are_unavailable(chat_server: ChatServer) -> None:
+    chat_server.plan = deque([503, 503, 503, 503])
+    with pytest.raises(LLMUnavailable) as caught:
+        make(chat_server, max_retries=2).complete("hi", PARAMS)
+    message = str(caught.value)
+    assert len(chat_server.requests) == 3
+    assert "503" in message and "planned failure 503" in message
+    assert "after 2 retries" in message
+    assert "\n" not in message
+
+
+def test_unreachable_endpoint(closed_port: int) -> None:
+    url = f"http://127.0.0.1:{closed_port}/v1"
+    llm = OpenAILLM(BackendOptions(base_url=url, max_retries=1, timeout_s=5))
+    with pytest.raises(LLMUnavailable) as caught:
+        llm.complete("hi", PARAMS)
+    assert str(caught.value) == (
+        f"openai backend: cannot reach {url} (connection refused) after 1 retry")
+
+
+def test_unreachable_without_retries_says_so(closed_port: int) -> None:
+    url = f"http://127.0.0.1:{closed_port}/v1"
+    with pytest.raises(LLMUnavailable, match=r"connection refused\) \(retries disabled\)$"):
+        OpenAILLM(BackendOptions(base_url=url, max_retries=0)).complete("hi", PARAMS)
+
+
+def test_timeout_is_unavailable(chat_server: ChatServer) -> None:
+    chat_server.delay_s = 1.0
+    llm = make(chat_server, timeout_s=0.1, max_retries=0)
+    with pytest.raises(LLMUnavailable, match=r"cannot reach .* \(timed out after 0.1 s\)"):
+        llm.complete("hi", PARAMS)
+
+
+def test_refused_key(chat_server: ChatServer) -> None:
+    chat_server.api_key = "sk-right"
+    with pytest.raises(LLMUnavailable) as caught:
+        make(chat_server, api_key="sk-wrong").complete("hi", PARAMS)
+    message = str(caught.value)
+    assert "API key was refused" in message and "401" in message
+    assert "\n" not in message
+    assert len(chat_server.requests) == 1, "a refused key is not retried"
+
+
+def test_unknown_model(chat_server: ChatServer) -> None:
+    chat_server.models = {"known"}
+    with pytest.raises(LLMUnavailable) as caught:
+        make(chat_server, model="no-such-model").complete("hi", PARAMS)
+    message = str(caught.value)
+    assert "model 'no-such-model' not found" in message and "404" in message
+    assert "does not exist" in message
+
+
+def test_other_api_error_gives_status_and_message(chat_server: ChatServer) -> None:
+    chat_server.plan = deque([400])
+    with pytest.raises(LLMUnavailable) as caught:
+        make(chat_server).complete("hi", PARAMS)
+    message = str(caught.value)
+    assert message == f"openai backend: {chat_server.url} answered 400 (planned failure 400)"
+    assert "Traceback" not in message
+
+
+@pytest.mark.parametrize("body", [b"not json", b'{"foo": 1}', b'{"choices": []}',
+                                  b'{"choices": [{"index": 0}]}', b'{"choices": "x"}'])
+def test_malformed_answer_is_unavailable(chat_server: ChatServer, body: bytes) -> None:
+    chat_server.raw = deque([body])
+    with pytest.raises(LLMUnavailable) as caught:
+        make(chat_server).complete("hi", PARAMS)
+    message = str(caught.value)
+    assert message.startswith("openai backend: ")
+    assert "answer from " + chat_server.url in message
+    assert "\n" not in message
+
+
+def test_answer_without_usage_has_no_token_counts(chat_server: ChatServer) -> None:
+    chat_server.raw = deque([b'{"choices": [{"index": 0, "message": {"role": "assistant", '
+                             b'"content": "ok"}}]}'])
+    record = make(chat_server).complete("hi", PARAMS)
+    assert (record.response, record.prompt_tokens, record.completion_tokens) == ("ok", None, None)
