@@ -8,7 +8,7 @@ request items -> Template 1 -> parsed relations (+ follow-ups for left-out objec
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -33,6 +33,9 @@ class ArrangeOptions:
     giving up on a fully consistent answer (the first one included).
     ``examples``: the few-shot block of Template 1 (``None``: the paper's
     examples; ``""``: zero-shot). ``notes``: Template 1's [notes] slot.
+    ``reprompt_temperature_step``: added to the temperature at each re-prompt
+    (capped at 1.0), because at the paper's 0.1 a new seed alone rarely changes
+    the answer.
     """
 
     m: int = 25
@@ -40,6 +43,7 @@ class ArrangeOptions:
     examples: str | None = None
     notes: str = ""
     params: SamplingParams = field(default_factory=SamplingParams)
+    reprompt_temperature_step: float = 0.3
 
 
 @dataclass(frozen=True)
@@ -107,7 +111,10 @@ def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: 
     kwargs = {} if options.examples is None else {"examples": options.examples}
     prompt = relations.template1_prompt(items, notes=options.notes, **kwargs)
     s = call_seed(seed, _STAGE_RELATIONS, attempt)
-    record = llm.complete(prompt, options.params.with_seed(s), relations.template1_grammar(items))
+    temperature = min(1.0, options.params.temperature + attempt * options.reprompt_temperature_step)
+    params = replace(options.params, seed=s, temperature=max(temperature,
+                                                               options.params.temperature))
+    record = llm.complete(prompt, params, relations.template1_grammar(items))
     parsed = relations.parse_relations(record.response, items, catalog)
     found = list(parsed.relations)
     ignored = list(parsed.ignored)
