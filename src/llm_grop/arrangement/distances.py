@@ -43,7 +43,7 @@ _UNIT = (r"centimet(?:er|re)s?|cm|millimet(?:er|re)s?|mm|met(?:er|re)s?|m|inch(?
 _RANGE = re.compile(
     rf"(?:between\s+)?({_NUM})\s*(?:-|–|to|and)\s*({_NUM})\s*({_UNIT})\b\.?", re.IGNORECASE)
 _SINGLE = re.compile(rf"(?<![\w.])({_NUM})\s*({_UNIT})(?![a-z])", re.IGNORECASE)
-_BARE = re.compile(rf"(?<![\w.])({_NUM})(?![\w.]|\.\d)", re.IGNORECASE)
+_BARE = re.compile(rf"(?<![\w.])({_NUM})(?!\w|\.\d)", re.IGNORECASE)
 
 
 @functools.lru_cache(maxsize=4)
@@ -94,7 +94,8 @@ def parse_distance_cm(text: str) -> float | None:
         value, best = (float(m.group(1)) + float(m.group(2))) / 2 * _unit_cm(m.group(3)), m.start()
     m = _SINGLE.search(text)
     if m and m.start() < best:
-        value, best = float(m.group(1)) * _unit_cm(m.group(2)), m.start()
+        sign = -1.0 if text[:m.start()].rstrip().endswith("-") else 1.0
+        value, best = sign * float(m.group(1)) * _unit_cm(m.group(2)), m.start()
     if value is None:
         stripped = re.sub(r"^\s*\d+[.)]\s+", "", text)
         m = _BARE.search(stripped)

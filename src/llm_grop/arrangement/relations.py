@@ -103,10 +103,14 @@ def _line_rule(pairs: Sequence[tuple[str, str]], centres: Sequence[str]) -> str:
 
 
 def template1_grammar(items: Sequence[Item]) -> str:
-    """GBNF: 1 to 2n lines "Place the S <relation> the O." (S != O) or "... in the center"."""
+    """GBNF: 1 to n lines "Place the S <relation> the O." (S != O) or "... in the center".
+
+    One line per object, as the template asks; a longer answer from a weak
+    model only repeats itself and costs time.
+    """
     names = [it.name for it in items]
     pairs = [(s, o) for s in names for o in names if s != o]
-    extra = max(2 * len(names) - 1, 1)
+    extra = max(len(names) - 1, 1)
     return f'root ::= line ("\\n" line){{0,{extra}}}\n' + _line_rule(pairs, names)
 
 
@@ -156,7 +160,7 @@ class _Reader:
     def _object_at(self, words: list[str], i: int) -> tuple[tuple[str, str], int] | None:
         for n in range(min(_MAX_OBJECT_WORDS, len(words) - i), 0, -1):
             text = " ".join(words[i:i + n])
-            if text in self.instances:
+            if text in self.instances and text not in self.by_kind:
                 return ("obj", text), n
             spec = self.catalog.lookup(text)
             if spec is not None:
@@ -172,7 +176,7 @@ class _Reader:
         return None
 
     def instance(self, mention: str, as_subject: bool) -> str:
-        if mention in self.instances:
+        if mention not in self.by_kind:
             return mention
         names = self.by_kind[mention]
         if as_subject:
