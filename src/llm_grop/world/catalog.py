@@ -16,10 +16,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Literal
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from llm_grop.errors import CatalogError, UnknownObject
+from llm_grop.world.datafile import load_yaml_model
 
 #: Environment variable holding extra catalog files, separated by ``os.pathsep``.
 CATALOG_ENV = "LLM_GROP_CATALOG"
@@ -172,20 +172,7 @@ class Catalog:
 
 
 def _parse(text: str, where: str) -> list[ObjectSpec]:
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f" line {mark.line + 1}" if mark is not None else ""
-        raise CatalogError(f"{where}{at}: not valid YAML") from None
-    if not isinstance(raw, dict):
-        raise CatalogError(f"{where}: top level: expected a mapping with an 'objects' list")
-    try:
-        model = _CatalogModel.model_validate(raw)
-    except ValidationError as exc:
-        err = exc.errors()[0]
-        loc = _location(raw, err["loc"])
-        raise CatalogError(f"{where}: {loc}: {err['msg']}") from None
+    model = load_yaml_model(text, where, _CatalogModel, "objects", "name", CatalogError)
     specs = []
     for i, obj in enumerate(model.objects):
         name = normalize_name(obj.name)
@@ -198,21 +185,3 @@ def _parse(text: str, where: str) -> list[ObjectSpec]:
         specs.append(ObjectSpec(name, obj.shape, (float(obj.size[0]), float(obj.size[1])),
                                 float(obj.height), tuple(obj.synonyms)))
     return specs
-
-
-def _location(raw: object, loc: tuple[int | str, ...]) -> str:
-    """A readable path such as ``objects[2] ('mug').size`` for a validation error."""
-    parts: list[str] = []
-    node = raw
-    for key in loc:
-        if isinstance(key, int):
-            label = f"[{key}]"
-            if isinstance(node, list) and key < len(node):
-                node = node[key]
-                if isinstance(node, dict) and "name" in node:
-                    label += f" ({node['name']!r})"
-            parts.append(label)
-        else:
-            parts.append(f".{key}" if parts else str(key))
-            node = node.get(key) if isinstance(node, dict) else None
-    return "".join(parts) or "top level"

@@ -13,10 +13,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, StrictInt, StringConstraints, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, StringConstraints
 
 from llm_grop.errors import BadInput
+from llm_grop.world.datafile import load_yaml_model
 
 _Name = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]
 
@@ -82,19 +82,7 @@ def get_task(n: int, tasks: Mapping[int, Task]) -> Task:
 
 
 def _parse(text: str, where: str) -> list[Task]:
-    try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        at = f" line {mark.line + 1}" if mark is not None else ""
-        raise BadInput(f"{where}{at}: not valid YAML") from None
-    if not isinstance(raw, dict):
-        raise BadInput(f"{where}: top level: expected a mapping with a 'tasks' list")
-    try:
-        model = _TasksModel.model_validate(raw)
-    except ValidationError as exc:
-        err = exc.errors()[0]
-        raise BadInput(f"{where}: {_location(raw, err['loc'])}: {err['msg']}") from None
+    model = load_yaml_model(text, where, _TasksModel, "tasks", "id")
     out: list[Task] = []
     seen: set[int] = set()
     for k, t in enumerate(model.tasks):
@@ -104,21 +92,3 @@ def _parse(text: str, where: str) -> list[Task]:
         out.append(Task(t.id, tuple(t.objects), tuple(t.tags),
                         t.request or default_request(t.objects)))
     return out
-
-
-def _location(raw: object, loc: tuple[int | str, ...]) -> str:
-    """A readable field path such as ``tasks[2] (id 3).objects[0]``."""
-    parts: list[str] = []
-    node = raw
-    for key in loc:
-        if isinstance(key, int):
-            label = f"[{key}]"
-            if isinstance(node, list) and key < len(node):
-                node = node[key]
-                if isinstance(node, dict) and "id" in node and not parts[1:]:
-                    label += f" (id {node['id']!r})"
-            parts.append(label)
-        else:
-            parts.append(f".{key}" if parts else str(key))
-            node = node.get(key) if isinstance(node, dict) else None
-    return "".join(parts) or "top level"

@@ -1,0 +1,53 @@
+"""Reading YAML data files users may write (catalogs, tasks); errors name the field."""
+
+from __future__ import annotations
+
+from typing import Any, TypeVar
+
+import yaml
+from pydantic import BaseModel, ValidationError
+
+from llm_grop.errors import BadInput
+
+M = TypeVar("M", bound=BaseModel)
+
+
+def load_yaml_model(text: str, where: str, model: type[M], top_key: str, label_key: str,
+                    error: type[BadInput] = BadInput) -> M:
+    """``text`` parsed as YAML and validated as ``model``.
+
+    Errors are ``error`` with one line: ``<where>[ line N]: <field path>: <reason>``;
+    list entries in the path are labelled with their ``label_key`` value.
+    """
+    try:
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" line {mark.line + 1}" if mark is not None else ""
+        raise error(f"{where}{at}: not valid YAML") from None
+    if not isinstance(raw, dict):
+        raise error(f"{where}: top level: expected a mapping with a {top_key!r} list")
+    try:
+        return model.model_validate(raw)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        raise error(f"{where}: {field_path(raw, err['loc'], label_key)}: {err['msg']}") from None
+
+
+def field_path(raw: Any, loc: tuple[int | str, ...], label_key: str) -> str:
+    """A readable path such as ``objects[2] ('mug').size`` for a validation error."""
+    parts: list[str] = []
+    node = raw
+    for key in loc:
+        if isinstance(key, int):
+            label = f"[{key}]"
+            if isinstance(node, list) and key < len(node):
+                node = node[key]
+                if isinstance(node, dict) and label_key in node and not parts[1:]:
+                    label += f" ({label_key} {node[label_key]!r})" if label_key == "id" \
+                        else f" ({node[label_key]!r})"
+            parts.append(label)
+        else:
+            parts.append(f".{key}" if parts else str(key))
+            node = node.get(key) if isinstance(node, dict) else None
+    return "".join(parts) or "top level"
