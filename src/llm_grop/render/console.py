@@ -37,7 +37,7 @@ def print_arrangement(result: ArrangementResult, console: Console) -> None:
                           "" if gap is None else f"{gap * 100:.1f}")
     console.print(rel_table)
 
-    pos_table = RichTable(title=f"Positions (table frame, m) - configuration 1 of "
+    pos_table = RichTable(title=f"Positions (m), configuration 1 of "
                           f"{len(result.configurations)}", title_justify="left")
     for col in ("object", "x", "y", "yaw", "on"):
         pos_table.add_column(col, justify="right" if col in ("x", "y", "yaw") else "left")
