@@ -1,10 +1,19 @@
 """Template 2 and the distance parser (paper §III-B).
 
 The LLM is asked how many centimetres separate two related objects; the answer
-is read as the **gap between the objects' edges** (see ``geometry``). A range
-("5-7 centimeters") gives its midpoint; inches, millimetres, metres, feet and
-number words are understood; a bare number is centimetres. When nothing can be
-read, the gap is :data:`DEFAULT_GAP_CM`, as in the authors' code.
+is read as the **gap between the objects' edges** (see ``geometry``), as in the
+authors' code. How :func:`parse_distance_cm` reads an answer:
+
+* A number with a unit wins over numbers without one (list numbering, "Step 2").
+  The first such distance in the text is taken.
+* A range ("5-7 centimeters", "5 to 7 cm", "between 5 and 7 cm", "5 or 6 cm")
+  gives its midpoint.
+* Units: centimetres, millimetres, metres, inches ("in." or a final "in", never
+  the word "in" inside a sentence), feet. Number words ("five", "twenty-two",
+  "one and a half", "half an inch") are understood.
+* Without any unit, the first number is read as centimetres.
+* A negative distance, one above :data:`MAX_GAP_CM`, or none at all gives ``None``;
+  :func:`parse_distance_m` then falls back to :data:`DEFAULT_GAP_CM`.
 """
 
 from __future__ import annotations
@@ -15,35 +24,33 @@ from importlib import resources
 
 from llm_grop.world.relation import CENTER, STACKING, Relation
 
-#: The gap used when an answer holds no readable distance, in centimetres.
+#: The gap used when an answer holds no readable distance, in centimetres
+#: (the authors' default).
 DEFAULT_GAP_CM = 5.0
 #: Answers above this many centimetres are taken as unreadable.
 MAX_GAP_CM = 200.0
 
-#: Centimetres per unit.
-_UNITS = {
-    "cm": 1.0, "centimeter": 1.0, "centimeters": 1.0, "centimetre": 1.0, "centimetres": 1.0,
-    "mm": 0.1, "millimeter": 0.1, "millimeters": 0.1, "millimetre": 0.1, "millimetres": 0.1,
-    "m": 100.0, "meter": 100.0, "meters": 100.0, "metre": 100.0, "metres": 100.0,
-    "in": 2.54, "inch": 2.54, "inches": 2.54, '"': 2.54,
-    "ft": 30.48, "foot": 30.48, "feet": 30.48,
-}
-_WORDS = {
-    "zero": 0, "one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7,
+#: Centimetres per unit, by the unit's first letters (see ``_unit_cm``).
+_UNIT_CM = {"cm": 1.0, "centi": 1.0, "mm": 0.1, "milli": 0.1, "m": 100.0, "met": 100.0,
+            "in": 2.54, "″": 2.54, "ft": 30.48, "foot": 30.48, "feet": 30.48}
+_ONES = {
+    "zero": 0, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7,
     "eight": 8, "nine": 9, "ten": 10, "eleven": 11, "twelve": 12, "thirteen": 13,
     "fourteen": 14, "fifteen": 15, "sixteen": 16, "seventeen": 17, "eighteen": 18,
-    "nineteen": 19, "twenty": 20, "thirty": 30, "forty": 40, "fifty": 50, "half": 0.5,
-    "a": 1, "an": 1,
+    "nineteen": 19,
 }
-_TENS = {"twenty", "thirty", "forty", "fifty"}
+_DIGITS = {"one": 1, **_ONES}
+_TENS = {"twenty": 20, "thirty": 30, "forty": 40, "fifty": 50, "sixty": 60, "seventy": 70,
+         "eighty": 80, "ninety": 90}
 
 _NUM = r"\d+(?:\.\d+)?|\.\d+"
-_UNIT = (r"centimet(?:er|re)s?|cm|millimet(?:er|re)s?|mm|met(?:er|re)s?|m|inch(?:es)?|in\.|"
-         r"in(?=\s*$)|ft|foot|feet")
-_RANGE = re.compile(
-    rf"(?:between\s+)?({_NUM})\s*(?:-|–|to|and)\s*({_NUM})\s*({_UNIT})\b\.?", re.IGNORECASE)
-_SINGLE = re.compile(rf"(?<![\w.])({_NUM})\s*({_UNIT})(?![a-z])", re.IGNORECASE)
-_BARE = re.compile(rf"(?<![\w.])({_NUM})(?!\w|\.\d)", re.IGNORECASE)
+_UNIT = (r"centimet(?:er|re)s?|cms?|millimet(?:er|re)s?|mm|met(?:er|re)s?|m|"
+         r"inch(?:es)?|in\.|in(?=\s*(?:$|[,;:)!?]))|″|ft|foot|feet")
+_QUANTITY = re.compile(
+    rf"(?<![\w.])({_NUM})(?:\s*({_UNIT})(?![a-z]))?(?:\s*(?:-|to|and|or)\s*({_NUM}))?\s*({_UNIT})"
+    r"(?![a-z])")
+_BARE = re.compile(rf"(?<![\w.])({_NUM})(?:\s*(?:-|to|or)\s*({_NUM}))?(?![\w])")
+_LIST_NUMBER = re.compile(r"^\s*(?:step\s*)?\d+\s*[.):]\s+", re.MULTILINE)
 
 
 @functools.lru_cache(maxsize=4)
@@ -51,59 +58,77 @@ def _asset(name: str) -> str:
     return resources.files("llm_grop.arrangement").joinpath(f"prompts/{name}").read_text("utf-8")
 
 
+def _a(name: str) -> str:
+    return f"{'an' if name[:1] in ('a', 'e', 'i', 'o', 'u') else 'a'} {name}"
+
+
 def template2_prompt(relation: Relation) -> str:
-    """Template 2 for one relation: how many centimetres apart the two objects should be."""
-    if relation.relation == CENTER or relation.relation in STACKING:
+    """Template 2 for one relation: how many centimetres apart its two objects should be.
+
+    Raises ``ValueError`` for ``center``, ``on top of`` and ``under``, which have no gap.
+    """
+    if relation.relation == CENTER or relation.relation in STACKING or relation.reference is None:
         raise ValueError(f"no distance is asked for {relation.relation!r}")
-    return _asset("template2.txt").format(subject=relation.subject, relation=relation.relation,
-                                          reference=relation.reference).strip()
+    a_subject = _a(relation.subject)
+    return _asset("template2.txt").format(
+        A_subject=a_subject[0].upper() + a_subject[1:], subject=relation.subject,
+        relation=relation.relation, a_reference=_a(relation.reference),
+        reference=relation.reference).strip()
 
 
 def template2_grammar() -> str:
-    """GBNF that makes a model answer "About N centimeters." or "N-M centimeters."."""
+    """GBNF for "About N centimeters." or "N-M centimeters." (N, M of one or two digits)."""
     return _asset("template2.gbnf")
 
 
 def _unit_cm(unit: str) -> float:
-    return _UNITS[unit.lower().rstrip(".")]
+    unit = unit.rstrip(".")
+    for prefix in ("centi", "milli", "met", "cm", "mm", "in", "ft", "foot", "feet", "″", "m"):
+        if unit.startswith(prefix):
+            return _UNIT_CM[prefix]
+    raise ValueError(f"unknown unit {unit!r}")
 
 
 def _words_to_digits(text: str) -> str:
-    """"twenty-two centimeters" -> "22 centimeters" (number words followed by a unit)."""
-    def repl(m: re.Match[str]) -> str:
-        words = re.split(r"[\s-]+", m.group(1).lower())
-        if words[0] in _TENS and len(words) == 2:
-            return f"{_WORDS[words[0]] + _WORDS[words[1]]:g} {m.group(2)}"
-        if len(words) == 3 and words[1] == "and" and words[2] == "half":
-            return f"{_WORDS[words[0]] + 0.5:g} {m.group(2)}"
-        return f"{_WORDS[words[-1]]:g} {m.group(2)}"
+    """Number words as digits: "twenty-two cm" -> "22 cm", "half an inch" -> "0.5 inch"."""
+    unit = rf"(?=\s*(?:{_UNIT})(?![a-z]))"
+    tens, ones = "|".join(_TENS), "|".join(_DIGITS)
+    text = re.sub(rf"\b({tens})(?:[\s-]+({ones}))?\b",
+                  lambda m: str(_TENS[m.group(1)] + (_DIGITS[m.group(2)] if m.group(2) else 0)),
+                  text)
+    text = re.sub(rf"\b({'|'.join(_ONES)})\b", lambda m: str(_ONES[m.group(1)]), text)
+    text = re.sub(r"\b(\d+|one|an?)\s+and\s+(?:a|one)\s+half\b",
+                  lambda m: f"{_DIGITS.get(m.group(1), 1) + 0.5:g}" if not m.group(1)[0].isdigit()
+                  else f"{int(m.group(1)) + 0.5:g}", text)
+    text = re.sub(rf"\bhalf\s+(?:a|an)\b{unit}", "0.5", text)
+    text = re.sub(rf"\b(?:a|an)\s+half\b{unit}", "0.5", text)
+    return re.sub(rf"\b(?:a|an|one)\b{unit}", "1", text)
 
-    names = "|".join(sorted(_WORDS, key=len, reverse=True))
-    pattern = (rf"\b((?:(?:{names})(?:[\s-]+and[\s-]+a[\s-]+half|[\s-]+(?:{names}))?))\s+"
-               rf"({_UNIT})(?![a-z])")
-    return re.sub(pattern, repl, text, flags=re.IGNORECASE)
+
+def _in_range(cm: float) -> float | None:
+    return cm if 0.0 <= cm <= MAX_GAP_CM else None
 
 
 def parse_distance_cm(text: str) -> float | None:
     """The distance an answer gives, in centimetres, or ``None`` when none can be read."""
-    text = _words_to_digits(text.replace("½", ".5"))
-    value: float | None = None
-    best = len(text) + 1
-    m = _RANGE.search(text)
+    text = text.lower().replace("½", ".5").replace("–", "-").replace("—", "-")
+    text = _words_to_digits(re.sub(r"[*_`]", "", text))
+    m = _QUANTITY.search(text)
     if m:
-        value, best = (float(m.group(1)) + float(m.group(2))) / 2 * _unit_cm(m.group(3)), m.start()
-    m = _SINGLE.search(text)
-    if m and m.start() < best:
-        sign = -1.0 if text[:m.start()].rstrip().endswith("-") else 1.0
-        value, best = sign * float(m.group(1)) * _unit_cm(m.group(2)), m.start()
-    if value is None:
-        stripped = re.sub(r"^\s*\d+[.)]\s+", "", text)
-        m = _BARE.search(stripped)
-        if m:
-            value = float(m.group(1))
-    if value is None or not 0 <= value <= MAX_GAP_CM:
+        if re.search(r"(?:-|minus\s*)$", text[:m.start()]):
+            return None
+        low = float(m.group(1))
+        high = float(m.group(3)) if m.group(3) else low
+        cm = (low + high) / 2 * _unit_cm(m.group(4))
+        return _in_range(cm)
+    m = _BARE.search(_LIST_NUMBER.sub("", text))
+    if m is None:
         return None
-    return value
+    if re.search(r"(?:-|minus\s*)$", _LIST_NUMBER.sub("", text)[:m.start()]):
+        return None
+    low = float(m.group(1))
+    high = float(m.group(2)) if m.group(2) else low
+    return _in_range((low + high) / 2)
 
 
 def parse_distance_m(text: str) -> tuple[float, bool]:
