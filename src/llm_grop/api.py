@@ -5,14 +5,24 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from os import PathLike
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
 from llm_grop.errors import BadInput
 from llm_grop.llm.base import LLM, BackendOptions, CallLog, create_llm
+from llm_grop.methods.registry import available_methods, get_method
+from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import items_from_names, parse_request
+from llm_grop.world.scene import Scene
 from llm_grop.world.table import Table
 from llm_grop.world.tasks import get_task, load_tasks
+
+if TYPE_CHECKING:
+    from llm_grop.planning.utility import GropOptions
+    from llm_grop.world.plan import RunResult
+
+__all__ = ["arrange", "available_methods", "make_llm", "resolve_items", "run"]
 
 
 def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
@@ -20,6 +30,18 @@ def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
     """A logged LLM: a backend by name (or an :class:`LLM` instance), recording to ``record``."""
     backend = create_llm(llm, options) if isinstance(llm, str) else llm
     return CallLog(backend, Path(record) if record is not None else None)
+
+
+def resolve_items(request: str | None, task: int | None,
+                  catalog: Catalog) -> tuple[str, tuple[Item, ...]]:
+    """The request's text and its items, from ``request`` or the paper's Table I ``task``."""
+    if task is not None:
+        t = get_task(task, load_tasks())
+        return request or t.request, tuple(items_from_names(t.objects, catalog))
+    if request is not None:
+        parsed = parse_request(request, catalog)
+        return parsed.text, tuple(parsed.items)
+    raise BadInput("request: give a request or a task number")
 
 
 def arrange(request: str | None = None, *, task: int | None = None,
@@ -36,14 +58,48 @@ def arrange(request: str | None = None, *, task: int | None = None,
     LLM call to a JSONL file that ``llm="replay"`` can read back.
     """
     catalog = catalog or Catalog.load(catalog_files)
-    if task is not None:
-        t = get_task(task, load_tasks())
-        items = items_from_names(t.objects, catalog)
-        text = request or t.request
-    elif request is not None:
-        parsed = parse_request(request, catalog)
-        items, text = parsed.items, parsed.text
-    else:
-        raise BadInput("request: give a request or a task number")
+    text, items = resolve_items(request, task, catalog)
     log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
     return arrange_items(text, items, log, catalog, table or Table(), seed, options, on_event)
+
+
+def run(request: str | None = None, *, task: int | None = None, method: str = "llm-grop",
+        scene: Scene | str | PathLike[str] | None = None, chairs: int | None = None,
+        seed: int = 0, llm: str | LLM | CallLog = "embedded",
+        llm_options: BackendOptions | None = None, catalog: Catalog | None = None,
+        catalog_files: Sequence[str | PathLike[str]] = (),
+        options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
+        simulator: str = "kinematic2d", planner: GropOptions | None = None,
+        on_event: Callable[[str], None] | None = None) -> RunResult:
+    """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
+
+    ``scene`` is a :class:`Scene`, a scene YAML file, or ``None`` for the packaged dining
+    room. ``chairs`` chairs are sampled near the target table for this seed (``None``
+    keeps the scene file's own chairs, or samples one if it has none); the robot senses
+    them at planning time.
+    ``method`` is one of :func:`available_methods`. The same seed gives the same run.
+    """
+    # Planning pulls in OMPL and scipy; import them only when a run needs them.
+    import numpy as np
+
+    from llm_grop.methods.base import EpisodeInput
+    from llm_grop.methods.episode import STAGE_SCENE, run_episode
+    from llm_grop.simulation.registry import create_simulator
+    from llm_grop.simulation.scenario import prepare_episode
+    from llm_grop.world.scene_file import load_scene
+
+    catalog = catalog or Catalog.load(catalog_files)
+    text, items = resolve_items(request, task, catalog)
+    chosen = get_method(method)
+    sim = create_simulator(simulator)
+    base = scene if isinstance(scene, Scene) else load_scene(scene)
+    if chairs is None and not base.chairs:
+        chairs = 1
+    episode = prepare_episode(base, items, np.random.default_rng([seed, STAGE_SCENE]),
+                              chairs=chairs)
+    log = None
+    if chosen.uses_llm:
+        log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
+    inp = EpisodeInput(text, items, episode.target_top, seed, catalog, log,
+                       options or ArrangeOptions(), on_event)
+    return run_episode(chosen, inp, episode, task=task, simulator=sim, planner=planner)

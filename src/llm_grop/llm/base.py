@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -109,6 +110,10 @@ class CallLog:
     llm: LLM
     record_path: Path | None = None
     calls: list[LLMCallRecord] = field(default_factory=list)
+    #: Wall-clock seconds spent in :meth:`complete` so far (recording included). Unlike
+    #: the records' ``latency_s``, which a replay copies from the recording, this is the
+    #: time this process really waited.
+    wall_s: float = 0.0
 
     @property
     def backend(self) -> str:
@@ -120,10 +125,14 @@ class CallLog:
 
     def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
                  ) -> LLMCallRecord:
-        record = self.llm.complete(prompt, params, grammar)
-        self.calls.append(record)
-        if self.record_path is not None:
-            from llm_grop.llm.replay import append_record
+        t0 = time.perf_counter()
+        try:
+            record = self.llm.complete(prompt, params, grammar)
+            self.calls.append(record)
+            if self.record_path is not None:
+                from llm_grop.llm.replay import append_record
 
-            append_record(self.record_path, record)
+                append_record(self.record_path, record)
+        finally:
+            self.wall_s += time.perf_counter() - t0
         return record

@@ -1,5 +1,6 @@
-"""Pictures and terminal summaries of arrangements."""
+"""Pictures and terminal summaries of arrangements and runs."""
 
+from llm_grop.render.room import draw_run
 from llm_grop.render.table import draw_arrangement
 
-__all__ = ["draw_arrangement"]
+__all__ = ["draw_arrangement", "draw_run"]

@@ -6,6 +6,7 @@ from rich.console import Console
 from rich.table import Table as RichTable
 
 from llm_grop.arrangement.pipeline import ArrangementResult
+from llm_grop.world.plan import ExecutedStep, RunResult
 
 
 def print_arrangement(result: ArrangementResult, console: Console) -> None:
@@ -50,3 +51,48 @@ def print_arrangement(result: ArrangementResult, console: Console) -> None:
         latency = sum(c.latency_s for c in a.llm.calls)
         console.print(f"LLM: {a.llm.backend} / {a.llm.model}, {len(a.llm.calls)} calls, "
                       f"{latency:.1f} s")
+
+
+def print_run(result: RunResult, console: Console) -> None:
+    """The episode's outcome: success, times, the plan and each object's actions."""
+    ex, plan = result.execution, result.plan
+    console.print(f"[bold]Request:[/bold] {result.request}")
+    console.print(f"[bold]Method:[/bold] {result.method}   [bold]seed:[/bold] {result.seed}   "
+                  f"[bold]chairs sensed:[/bold] {len(result.scene.chairs)}")
+    console.print(f"Plan: configuration {plan.configuration_index + 1} of "
+                  f"{plan.configurations_considered}, expected utility {plan.utility:.1f}, "
+                  f"feasibility {plan.feasibility:.2f}, expected cost {plan.cost_s:.1f} s")
+    table = RichTable(title="Execution", title_justify="left")
+    for col in ("#", "object", "standing (x, y, θ)", "navigate", "pick", "place", "placed"):
+        table.add_column(col)
+    for k, name in enumerate(plan.order, 1):
+        steps = [s for s in ex.steps if s.object == name]
+        place = [s for s in steps if s.action == "place"]
+        stand = place[-1].standing if place else None
+        table.add_row(
+            str(k), name,
+            f"{stand.x:.2f}, {stand.y:.2f}, {stand.theta:+.2f}" if stand else "-",
+            *(_attempts([s for s in steps if s.action == a]) for a in ("navigate", "pick",
+                                                                       "place")),
+            "[green]yes[/green]" if name not in ex.unplaced else "[red]no[/red]")
+    console.print(table)
+    verdict = "[green]success[/green]" if ex.success else \
+        f"[red]failed[/red] ({', '.join(ex.unplaced)} not placed)"
+    console.print(f"Result: {verdict}; execution time {ex.execution_time_s:.1f} s (simulated); "
+                  f"planning time {result.planning_time_s * 1000:.0f} ms; "
+                  f"failures {ex.failures}")
+    if result.planned.llm is not None:
+        llm = result.planned.llm
+        latency = sum(c.latency_s for c in llm.calls)
+        console.print(f"LLM: {llm.backend} / {llm.model}, {len(llm.calls)} calls, "
+                      f"{latency:.1f} s")
+
+
+def _attempts(steps: list[ExecutedStep]) -> str:
+    """``"ok"``, ``"ok after 2 failures"`` or ``"failed xN"``."""
+    if not steps:
+        return "-"
+    fails = sum(not s.ok for s in steps)
+    if steps[-1].ok:
+        return "ok" if not fails else f"ok after {fails} failure{'s' * (fails > 1)}"
+    return f"[red]failed x{fails}[/red]"

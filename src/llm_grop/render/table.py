@@ -54,7 +54,7 @@ _SHORT_RELATION = {
     "below and to the right of": "below-right of",
 }
 # Fixed style, so that a user's matplotlibrc cannot change the picture.
-_STYLE = {"font.family": "DejaVu Sans", "font.size": 9.0, "axes.linewidth": 0.8,
+STYLE = {"font.family": "DejaVu Sans", "font.size": 9.0, "axes.linewidth": 0.8,
           "text.color": "#111111", "axes.edgecolor": "#666666", "xtick.color": "#444444",
           "ytick.color": "#444444", "axes.labelcolor": "#222222"}
 
@@ -77,28 +77,51 @@ def draw_arrangement(arrangement: Arrangement, path: str | Path, *, title: str |
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise BadInput(f"image {path}: only PNG pictures are made; use a name ending in .png")
-    with matplotlib.rc_context(_STYLE):
-        fig = _figure(arrangement, title, show_relations)
-        tmp = path.with_name(f".{path.name}.tmp")
-        try:
-            fig.savefig(tmp, format="png", dpi=DPI, facecolor=BACKGROUND,
-                        metadata={"Software": None})
-            tmp.replace(path)
-        except OSError as exc:
-            tmp.unlink(missing_ok=True)
-            raise BadInput(f"image {path}: cannot write ({exc.strerror or exc})") from None
+    with matplotlib.rc_context(STYLE):
+        save_png(_figure(arrangement, title, show_relations), path)
+
+
+def save_png(fig: Figure, path: Path, *, dpi: int = DPI) -> None:
+    """Write ``fig`` to ``path`` as PNG at ``dpi`` dots per inch, replacing it atomically.
+
+    The PNG carries no software or time stamp, so the same figure gives the same bytes.
+    Raises :class:`BadInput` (one line, naming ``path``) if it cannot be written.
+    """
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        fig.savefig(tmp, format="png", dpi=dpi, facecolor=BACKGROUND,
+                    metadata={"Software": None})
+        tmp.replace(path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise BadInput(f"image {path}: cannot write ({exc.strerror or exc})") from None
 
 
 def _figure(arrangement: Arrangement, title: str | None, show_relations: bool) -> Figure:
     fig = Figure(figsize=FIGSIZE_IN, dpi=DPI, facecolor=BACKGROUND)
     FigureCanvasAgg(fig)
     ax = fig.add_axes(_AXES_RECT)
+    draw_table_on(ax, arrangement, show_relations=show_relations)
+    _draw_title(fig, arrangement, title)
+    return fig
+
+
+def draw_table_on(ax: Axes, arrangement: Arrangement, *, show_relations: bool = True,
+                  compact: bool = False) -> None:
+    """Draw ``arrangement`` top-down onto ``ax``, in its table frame (data units: metres).
+
+    The table top, the diner at its -y edge and every object are drawn to scale with
+    equal aspect; tick labels read in centimetres. ``show_relations`` adds an arrow from
+    each relation's subject to its reference. ``compact`` draws smaller labels and no axis
+    labels or tick labels (and never a legend), for an inset or a small panel. The
+    figure's title is left to the caller.
+    """
     ax.set_facecolor(BACKGROUND)
     table = arrangement.table
     w, d = table.width, table.depth
     ax.add_patch(Rectangle((-w / 2, -d / 2), w, d, facecolor=TABLE_FACE, edgecolor=TABLE_EDGE,
-                           linewidth=2.0, zorder=1))
-    _draw_diner(ax, d)
+                           linewidth=1.2 if compact else 2.0, zorder=1))
+    _draw_diner(ax, d, compact)
     stacks = _stacks(arrangement.placements)
     by_name = {p.name: p for p in arrangement.placements}
     order = sorted(range(len(arrangement.placements)),
@@ -108,26 +131,24 @@ def _figure(arrangement: Arrangement, title: str | None, show_relations: bool) -
     for i in order:
         p = arrangement.placements[i]
         depth, root = stacks[p.name]
-        _draw_object(ax, p, depth, colors[p.kind or p.name])
+        _draw_object(ax, p, depth, colors[p.kind or p.name], compact)
         if depth > 0:
             # Labels of one stack are put one above the other, next to the stack.
-            _label_stacked(ax, p, by_name[root], levels.get(root, 0))
+            _label_stacked(ax, p, by_name[root], levels.get(root, 0), compact)
             levels[root] = levels.get(root, 0) + 1
     if show_relations:
-        _draw_relations(ax, arrangement)
-    _set_limits(ax, arrangement)
-    _draw_title(fig, arrangement, title)
-    return fig
+        _draw_relations(ax, arrangement, compact)
+    _set_limits(ax, arrangement, compact)
 
 
-def _draw_diner(ax: Axes, depth: float) -> None:
+def _draw_diner(ax: Axes, depth: float, compact: bool = False) -> None:
     edge = -depth / 2
     ax.add_patch(Wedge((0.0, edge - 0.10), 0.07, 0, 180, facecolor="#c8c8c8",
                        edgecolor="#7a7a7a", linewidth=1.0, zorder=1))
     ax.add_patch(Circle((0.0, edge - 0.055), 0.022, facecolor="#c8c8c8", edgecolor="#7a7a7a",
                         linewidth=1.0, zorder=1))
-    ax.text(0.0, edge - 0.115, "diner", ha="center", va="top", fontsize=9, color="#444444",
-            zorder=1)
+    ax.text(0.0, edge - 0.115, "diner", ha="center", va="top", fontsize=6 if compact else 9,
+            color="#444444", zorder=1)
 
 
 def _stacks(placements: Sequence[Placement]) -> dict[str, tuple[int, str]]:
@@ -158,7 +179,7 @@ def _half_extent_y(p: Placement) -> float:
     return abs(sx / 2 * math.sin(p.yaw)) + abs(sy / 2 * math.cos(p.yaw))
 
 
-def _draw_object(ax: Axes, p: Placement, depth: int, color: str) -> None:
+def _draw_object(ax: Axes, p: Placement, depth: int, color: str, compact: bool = False) -> None:
     stacked = depth > 0
     # A stacked object is see-through with a dashed, opaque outline, so both it and
     # its support stay visible.
@@ -178,21 +199,26 @@ def _draw_object(ax: Axes, p: Placement, depth: int, color: str) -> None:
         if p.shape == "box" and sy > 1.5 * sx:
             rotation = (math.degrees(p.yaw) + 90.0) % 180.0  # along the long side, upright
             rotation = rotation - 180.0 if rotation > 90.0 else rotation
-        ax.text(p.x, p.y, p.name, ha="center", va="center", fontsize=7, rotation=rotation,
+        ax.text(p.x, p.y, p.name, ha="center", va="center", fontsize=_small(7, compact),
+                rotation=rotation,
                 rotation_mode="anchor", bbox=_LABEL_BOX, zorder=10)
 
 
-def _label_stacked(ax: Axes, p: Placement, root: Placement, level: int) -> None:
+def _label_stacked(ax: Axes, p: Placement, root: Placement, level: int,
+                   compact: bool = False) -> None:
     """Label ``p`` (resting on another object) beside the top of its stack's ``root``.
 
     Labels lean toward the middle of the table (so they stay in the picture) and go
     one line higher per ``level``, so they stay clear of the support's own label.
     """
     right = root.x > 0
-    dx = -16 if right else 16
-    place = offset_copy(ax.transData, fig=ax.figure, x=dx, y=6 + 12 * level, units="points")
+    scale = 0.65 if compact else 1.0
+    dx = (-16 if right else 16) * scale
+    place = offset_copy(ax.transData, fig=ax.figure, x=dx, y=(6 + 12 * level) * scale,
+                        units="points")
     ax.annotate(f"{p.name} (on {p.on})", xy=(p.x, p.y + _half_extent_y(p) * 0.6),
-                xytext=(root.x, root.y + _half_extent_y(root)), textcoords=place, fontsize=7,
+                xytext=(root.x, root.y + _half_extent_y(root)), textcoords=place,
+                fontsize=_small(7, compact),
                 ha="right" if right else "left", va="bottom", zorder=12, bbox=_LABEL_BOX,
                 arrowprops={"arrowstyle": "-", "color": "#444444", "linewidth": 0.7,
                             "shrinkA": 0, "shrinkB": 1})
@@ -208,7 +234,7 @@ def _boundary_distance(p: Placement, ux: float, uy: float) -> float:
     return min(sx / 2 / lx if lx > 1e-12 else math.inf, sy / 2 / ly if ly > 1e-12 else math.inf)
 
 
-def _draw_relations(ax: Axes, arrangement: Arrangement) -> None:
+def _draw_relations(ax: Axes, arrangement: Arrangement, compact: bool = False) -> None:
     """An arrow from each relation's subject to its reference, edge to edge, labelled."""
     by_name = {p.name: p for p in arrangement.placements}
     for rel in arrangement.relations:
@@ -237,12 +263,18 @@ def _draw_relations(ax: Axes, arrangement: Arrangement) -> None:
                     arrowprops={"arrowstyle": "->", "color": RELATION_COLOR, "linewidth": 0.9,
                                 "linestyle": ":", "shrinkA": 0, "shrinkB": 0})
         mid = ((start[0] + stop[0]) / 2, (start[1] + stop[1]) / 2)
-        ax.text(*mid, label, fontsize=6.5, color=RELATION_COLOR, ha="center", va="center",
-                zorder=21, bbox={"boxstyle": "round,pad=0.1", "facecolor": "#ffffe0",
-                                 "alpha": 0.85, "edgecolor": "none"})
+        ax.text(*mid, label, fontsize=_small(6.5, compact), color=RELATION_COLOR,
+                ha="center", va="center", zorder=21,
+                bbox={"boxstyle": "round,pad=0.1", "facecolor": "#ffffe0", "alpha": 0.85,
+                      "edgecolor": "none"})
 
 
-def _set_limits(ax: Axes, arrangement: Arrangement) -> None:
+def _small(size: float, compact: bool) -> float:
+    """A font size in points, shrunk for a compact drawing."""
+    return round(size * 0.7, 1) if compact else size
+
+
+def _set_limits(ax: Axes, arrangement: Arrangement, compact: bool = False) -> None:
     w, d = arrangement.table.width, arrangement.table.depth
     x0, x1 = -w / 2 - _MARGIN_M, w / 2 + _MARGIN_M
     y0, y1 = -d / 2 - _DINER_SPACE_M, d / 2 + _MARGIN_M
@@ -252,15 +284,18 @@ def _set_limits(ax: Axes, arrangement: Arrangement) -> None:
         y0, y1 = min(y0, p.y - r - _MARGIN_M), max(y1, p.y + r + _MARGIN_M)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
-    ax.set_aspect("equal", adjustable="box", anchor="N")
+    ax.set_aspect("equal", adjustable="box", anchor="C" if compact else "N")
     step = _tick_step(max(x1 - x0, y1 - y0))
     cm = FuncFormatter(lambda v, _pos: f"{v * 100:.0f}")
     for axis in (ax.xaxis, ax.yaxis):
         axis.set_major_locator(MultipleLocator(step))
         axis.set_major_formatter(cm)
-    ax.tick_params(labelsize=7, length=2)
     ax.grid(True, color="#d9d9d9", linewidth=0.5, zorder=0)
     ax.set_axisbelow(True)
+    if compact:
+        ax.tick_params(labelbottom=False, labelleft=False, length=0)
+        return
+    ax.tick_params(labelsize=7, length=2)
     ax.set_xlabel("x (cm), to the diner's right", fontsize=8)
     ax.set_ylabel("y (cm), away from the diner", fontsize=8)
 

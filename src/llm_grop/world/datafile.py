@@ -20,7 +20,7 @@ def load_yaml_model(text: str, where: str, model: type[M], top_key: str, label_k
     list entries in the path are labelled with their ``label_key`` value.
     """
     try:
-        raw = yaml.safe_load(text)
+        raw = yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         at = f" line {mark.line + 1}" if mark is not None else ""

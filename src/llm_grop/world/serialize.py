@@ -18,7 +18,8 @@ from llm_grop.world.table import Table
 _DIGITS = 4
 
 
-def _r(value: float) -> float:
+def rounded(value: float) -> float:
+    """``value`` rounded to 0.1 mm / 0.1 mrad for JSON, without negative zero."""
     return round(float(value), _DIGITS) + 0.0  # + 0.0 turns -0.0 into 0.0
 
 
@@ -30,9 +31,10 @@ def relation_to_dict(rel: Relation) -> dict[str, Any]:
 def placement_to_dict(p: Placement) -> dict[str, Any]:
     """A contract ``objects[]`` entry."""
     return {
-        "name": p.name, "x": _r(p.x), "y": _r(p.y), "yaw": _r(p.yaw), "shape": p.shape,
-        "size": [_r(p.size[0]), _r(p.size[1])], "on": p.on,
-        "kind": p.kind or p.name, "height": _r(p.height),
+        "name": p.name, "x": rounded(p.x), "y": rounded(p.y), "yaw": rounded(p.yaw),
+        "shape": p.shape,
+        "size": [rounded(p.size[0]), rounded(p.size[1])], "on": p.on,
+        "kind": p.kind or p.name, "height": rounded(p.height),
     }
 
 
@@ -49,7 +51,7 @@ def arrangement_to_dict(a: Arrangement) -> dict[str, Any]:
     """The contract's arrangement JSON as a dict."""
     out: dict[str, Any] = {
         "request": a.request,
-        "table": {"shape": a.table.shape, "size": [_r(a.table.width), _r(a.table.depth)]},
+        "table": {"shape": a.table.shape, "size": [rounded(a.table.width), rounded(a.table.depth)]},
         "objects": [placement_to_dict(p) for p in a.placements],
         "relations": [relation_to_dict(r) for r in a.relations],
     }

@@ -1,0 +1,57 @@
+"""The ``llm-grop`` command: parses flags, calls the API, maps errors to exit codes."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+from llm_grop.cli.arrange import arrange
+from llm_grop.cli.options import EPILOG
+from llm_grop.cli.run import run
+from llm_grop.errors import LLMGropError
+
+
+@click.group(epilog=EPILOG)
+@click.version_option(package_name="llm-grop")
+def cli() -> None:
+    """llm-grop: set a table the way people expect (LLM-GROP, IROS 2023)."""
+
+
+cli.add_command(arrange)
+cli.add_command(run)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: runs the command, printing one line and no traceback on failure."""
+    try:
+        cli.main(args=argv, prog_name="llm-grop", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("llm-grop: interrupted", err=True)
+        return 130
+    except click.exceptions.NoArgsIsHelpError as exc:
+        click.echo(exc.format_message())
+        return 0
+    except click.ClickException as exc:
+        ctx = getattr(exc, "ctx", None)
+        where = f"{ctx.command_path}: " if ctx is not None else ""
+        click.echo(f"llm-grop: error: {where}{exc.format_message()}", err=True)
+        return 2
+    except LLMGropError as exc:
+        click.echo(f"llm-grop: error: {exc}", err=True)
+        return exc.exit_code
+    except OSError as exc:
+        click.echo(f"llm-grop: error: {exc.filename or ''}: {exc.strerror or exc}", err=True)
+        return 2
+    except Exception as exc:  # noqa: BLE001 - the contract promises no traceback
+        if os.environ.get("LLM_GROP_DEBUG"):
+            raise
+        click.echo(f"llm-grop: internal error: {type(exc).__name__}: {exc} "
+                   "(set LLM_GROP_DEBUG=1 for a traceback)", err=True)
+        return 3
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

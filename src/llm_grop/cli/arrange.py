@@ -1,0 +1,62 @@
+"""``llm-grop arrange``: the semantic arrangement alone (paper §III-A, §III-B)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
+
+
+@click.command(epilog=EPILOG)
+@click.argument("request", required=False)
+@click.option("--task", type=click.IntRange(1),
+              help="Use the objects of the paper's Table I task N.")
+@click.option("--table", "table_size", default="0.9x0.6", show_default=True,
+              help="Table top WxD in metres.")
+@click.option("--seed", default=0, show_default=True,
+              help="Seed for every LLM call and the sampler.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write the arrangement JSON here.")
+@click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write a top-down PNG of the table here.")
+@llm_flags
+@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+def arrange(request: str | None, task: int | None, table_size: str, seed: int,
+            json_path: Path | None, image_path: Path | None, record_path: Path | None,
+            catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
+    """Arrange the objects of REQUEST on the table (paper §III-A, §III-B)."""
+    from rich.console import Console
+
+    from llm_grop.api import arrange as api_arrange
+    from llm_grop.world.serialize import arrangement_to_dict, write_json
+    from llm_grop.world.table import Table
+
+    check_request("arrange", request, task)
+    table = Table.parse(table_size)
+    llm_options, options = llm_settings(**flags)
+    out = Console()
+    err = Console(stderr=True)
+    with err.status("starting", spinner="dots") as status:
+        def on_event(message: str) -> None:
+            if not quiet:
+                status.update(message)
+
+        result = api_arrange(request, task=task, llm=flags["backend"], llm_options=llm_options,
+                             table=table, seed=seed, catalog_files=catalog_files,
+                             options=options, record=record_path, on_event=on_event)
+    if json_path is not None:
+        write_json(json_path, arrangement_to_dict(result.arrangement))
+    if image_path is not None:
+        from llm_grop.render.table import draw_arrangement
+
+        draw_arrangement(result.arrangement, image_path)
+    if not quiet:
+        from llm_grop.render.console import print_arrangement
+
+        print_arrangement(result, out)
+        for label, path in (("arrangement JSON", json_path), ("picture", image_path)):
+            if path is not None:
+                out.print(f"Wrote {label}: {path}")

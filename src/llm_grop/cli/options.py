@@ -1,0 +1,79 @@
+"""Flags shared by the commands that call an LLM, and what they build."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar
+
+import click
+
+from llm_grop.errors import BadInput
+
+EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+_LLM_OPTIONS = [
+    click.option("--llm", "backend", default="embedded", show_default=True,
+                 help="LLM backend: embedded, openai or replay."),
+    click.option("--model", help="Model name (openai) or GGUF path (embedded)."),
+    click.option("--base-url", help="OpenAI-compatible endpoint (default: $OPENAI_BASE_URL)."),
+    click.option("--replay", "replay_path", type=click.Path(dir_okay=False, path_type=Path),
+                 help="JSONL of recorded calls, for --llm replay."),
+    click.option("--record", "record_path", type=click.Path(dir_okay=False, path_type=Path),
+                 help="Append every LLM call to this JSONL file."),
+    click.option("--catalog", "catalog_files", multiple=True,
+                 type=click.Path(dir_okay=False, path_type=Path),
+                 help="An extra object catalog file (repeatable)."),
+    click.option("-m", "--configurations", "m", default=25, show_default=True,
+                 type=click.IntRange(1), help="Configurations to sample (M)."),
+    click.option("--attempts", default=3, show_default=True, type=click.IntRange(1),
+                 help="Template 1 prompts before keeping the largest consistent subset."),
+    click.option("--zero-shot", is_flag=True, help="Leave the paper's few-shot examples out."),
+    click.option("--notes", default="", help="Text for Template 1's [notes] slot."),
+    click.option("--temperature", default=0.1, show_default=True, type=float),
+    click.option("--top-p", default=1.0, show_default=True, type=float),
+    click.option("--max-tokens", default=512, show_default=True, type=click.IntRange(1)),
+    click.option("--frequency-penalty", default=0.0, show_default=True, type=float),
+    click.option("--presence-penalty", default=0.0, show_default=True, type=float),
+    click.option("--timeout", "timeout_s", default=60.0, show_default=True, type=float,
+                 help="Seconds per LLM request."),
+    click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
+                 help="Retries on transient LLM errors (connection, 429, 5xx)."),
+]
+
+
+def llm_flags(f: F) -> F:
+    """Add the LLM and arrangement flags to a command."""
+    for option in reversed(_LLM_OPTIONS):
+        f = option(f)
+    return f
+
+
+def llm_settings(backend: str, model: str | None, base_url: str | None,
+                 replay_path: Path | None, m: int, attempts: int, zero_shot: bool, notes: str,
+                 temperature: float, top_p: float, max_tokens: int, frequency_penalty: float,
+                 presence_penalty: float, timeout_s: float, retries: int,
+                 **_: Any) -> tuple[Any, Any]:
+    """``(BackendOptions, ArrangeOptions)`` from the flags of :func:`llm_flags`."""
+    from llm_grop.arrangement.pipeline import ArrangeOptions
+    from llm_grop.llm.base import BackendOptions, SamplingParams
+
+    if backend == "replay" and replay_path is None:
+        raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
+    params = SamplingParams(temperature, top_p, max_tokens, frequency_penalty, presence_penalty)
+    options = ArrangeOptions(m=m, max_attempts=attempts, examples="" if zero_shot else None,
+                             notes=notes, params=params)
+    llm_options = BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
+                                 max_retries=retries, replay_path=replay_path)
+    return llm_options, options
+
+
+def check_request(command: str, request: str | None, task: int | None) -> None:
+    """:class:`BadInput` unless a non-empty REQUEST or a task was given."""
+    if request is None and task is None:
+        raise BadInput(f"{command}: give a REQUEST or --task N")
+    if request is not None and not request.strip():
+        raise BadInput("request: empty; name the objects, e.g. "
+                       "'a dinner plate, a dinner fork and a dinner knife'")

@@ -1,0 +1,103 @@
+"""What a method is: where its arrangement comes from and how it picks standing positions.
+
+The four methods of the paper differ in exactly two choices and share everything else
+(sequencing, navigation, simulator):
+
+========== ============================ ===========================================
+method     arrangement                  standing positions
+========== ============================ ===========================================
+tpra       random, collision-free       uniform among those within reach
+latp       the LLM's (§III-A, §III-B)   uniform among those within reach
+grop       random, collision-free       utility-optimal over M configurations
+llm-grop   the LLM's                    utility-optimal over M configurations
+========== ============================ ===========================================
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal, Protocol
+
+import numpy as np
+
+from llm_grop.arrangement.pipeline import ArrangeOptions, arrange_items
+from llm_grop.arrangement.random_placement import random_configurations
+from llm_grop.errors import BadInput
+from llm_grop.llm.base import CallLog
+from llm_grop.world.arrangement import Arrangement, Configuration, Item
+from llm_grop.world.catalog import Catalog
+from llm_grop.world.table import Table
+
+
+@dataclass(frozen=True)
+class EpisodeInput:
+    """What a method is given: the request and its items, the table to set, the seed, and
+    an LLM (``None`` for methods that use none)."""
+
+    request: str
+    items: tuple[Item, ...]
+    table: Table
+    seed: int
+    catalog: Catalog
+    llm: CallLog | None = None
+    options: ArrangeOptions = ArrangeOptions()
+    on_event: Callable[[str], None] | None = None
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """A method's arrangement: the one shown (first configuration), the M configurations
+    to plan for, and the seconds spent computing them with LLM calls excluded."""
+
+    arrangement: Arrangement
+    configurations: tuple[Configuration, ...]
+    compute_time_s: float
+
+
+class Method(Protocol):
+    """A compared method."""
+
+    name: str
+    description: str
+    uses_llm: bool
+    standing: Literal["utility", "uniform"]
+    best_of_all: bool
+
+    def propose(self, inp: EpisodeInput) -> Proposal:
+        """The arrangement and the configurations to plan for."""
+        ...
+
+
+@dataclass(frozen=True)
+class ComposedMethod:
+    """A method built from an arrangement source and a standing policy.
+
+    ``uses_llm``: arrangement from the LLM pipeline, else random. ``standing``: ``utility``
+    (GROP) or ``uniform``. ``best_of_all``: plan for all M configurations and keep the best
+    (GROP), else the first that has a plan.
+    """
+
+    name: str
+    description: str
+    uses_llm: bool
+    standing: Literal["utility", "uniform"]
+    best_of_all: bool
+
+    def propose(self, inp: EpisodeInput) -> Proposal:
+        t0 = time.perf_counter()
+        if self.uses_llm:
+            if inp.llm is None:
+                raise BadInput(f"method {self.name!r} needs an LLM")
+            before = inp.llm.wall_s
+            result = arrange_items(inp.request, inp.items, inp.llm, inp.catalog, inp.table,
+                                   inp.seed, inp.options, inp.on_event)
+            llm_s = inp.llm.wall_s - before
+            return Proposal(result.arrangement, result.configurations,
+                            max(time.perf_counter() - t0 - llm_s, 0.0))
+        rng = np.random.default_rng([inp.seed, 4])
+        configs = random_configurations(inp.items, inp.table, rng, m=inp.options.m)
+        arrangement = Arrangement(inp.request, inp.table, configs[0].placements)
+        return Proposal(arrangement, configs, time.perf_counter() - t0)
+

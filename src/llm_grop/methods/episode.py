@@ -1,0 +1,76 @@
+"""One episode: a method's arrangement, the task-motion plan, and its simulated execution.
+
+Random streams are separate per stage (``default_rng([seed, stage])``), so every method
+run on the same seed sees the same scene and chairs, and the comparison is paired.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from llm_grop.arrangement.sampling import violations
+from llm_grop.methods.base import EpisodeInput, Method
+from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY, FeasibilityModel
+from llm_grop.planning.grop import build_plan, choose
+from llm_grop.planning.navigation import Navigator
+from llm_grop.planning.utility import GropOptions, PlanningContext
+from llm_grop.simulation.base import Simulator
+from llm_grop.world.arrangement import Arrangement, Configuration
+from llm_grop.world.plan import Execution, RunResult
+from llm_grop.world.relation import Relation
+from llm_grop.world.scene import Scene
+
+#: Stage numbers of the per-episode random streams.
+STAGE_SCENE, STAGE_PLAN, STAGE_SIMULATION = 1, 2, 3
+
+
+def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | None,
+                simulator: Simulator, model: FeasibilityModel = DEFAULT_FEASIBILITY,
+                planner: GropOptions | None = None) -> RunResult:
+    """Arrange, plan and execute in ``scene`` (its chairs are sensed at planning time).
+
+    Planning time counts the arrangement's computation without LLM calls, GROP and the
+    OMPL paths. Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
+    """
+    say = inp.on_event or (lambda _msg: None)
+    proposal = method.propose(inp)
+    say(f"planning for {len(proposal.configurations)} configuration(s)")
+    t0 = time.perf_counter()
+    ctx = PlanningContext(scene, inp.items, model, planner)
+    cand = choose(ctx, proposal.configurations, method.standing,
+                  np.random.default_rng([inp.seed, STAGE_PLAN]), method.best_of_all)
+    navigator = Navigator(scene, scene.robot.base_radius_m,
+                          time_limit_s=ctx.options.path_time_limit_s)
+    plan = build_plan(ctx, cand, navigator, inp.seed, len(proposal.configurations))
+    planning_s = proposal.compute_time_s + time.perf_counter() - t0
+    say("executing the plan")
+    execution = simulator.execute(plan, scene,
+                                  np.random.default_rng([inp.seed, STAGE_SIMULATION]),
+                                  replan=navigator, model=model)
+    planned = replace(proposal.arrangement, placements=plan.configuration)
+    return RunResult(method=method.name, task=task, seed=inp.seed, request=inp.request,
+                     planned=planned, plan=plan, execution=execution,
+                     final=final_arrangement(planned, execution),
+                     planning_time_s=planning_s, scene=scene)
+
+
+def final_arrangement(planned: Arrangement, execution: Execution) -> Arrangement:
+    """Where the objects really are, with the planned relations that still hold there."""
+    config = Configuration(execution.final)
+    names = {p.name for p in execution.final}
+    kept = tuple(r for r in planned.relations
+                 if r.subject in names and (r.reference is None or r.reference in names)
+                 and not _breaks(config, r, planned))
+    return replace(planned, placements=execution.final, relations=kept, warnings=(),
+                   conflicts=())
+
+
+def _breaks(config: Configuration, relation: Relation, planned: Arrangement) -> bool:
+    """Whether ``relation`` fails between its objects' final places (or they overlap or
+    left the table)."""
+    pair = {relation.subject, relation.reference}
+    sub = Configuration(tuple(p for p in config.placements if p.name in pair))
+    return bool(violations(sub, [relation], planned.table))

@@ -1,0 +1,196 @@
+"""GROP: the task-motion plan of maximal utility over M configurations (paper §III-C).
+
+For each configuration, each object gets the standing position that maximises
+``w * feasibility - cost`` given the object that follows it, the order is the one of
+least total cost with supports first, and the configuration whose plan has the highest
+utility is the one executed. Navigation legs of the chosen plan are then planned with
+OMPL around the sensed chairs. The baselines' *uniform* standing policy (TPRA, LATP)
+shares all of this except the standing choice.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from llm_grop.errors import Infeasible
+from llm_grop.planning.navigation import Navigator
+from llm_grop.planning.sequencing import best_order, supports_before
+from llm_grop.planning.timing import leg_duration_s
+from llm_grop.planning.utility import PlanningContext
+from llm_grop.world.arrangement import Configuration, Placement
+from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.plan import Plan, Step
+
+StandingPolicy = Literal["utility", "uniform"]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One configuration's best plan before paths: order, standing index per object (item
+    order), alternatives, expected utility (seconds), feasibility and cost (seconds)."""
+
+    index: int
+    placements: tuple[Placement, ...]
+    order: tuple[int, ...]
+    stand: tuple[int, ...]
+    alternatives: tuple[tuple[int, ...], ...]
+    utility: float
+    feasibility: float
+    cost_s: float
+    place_p: tuple[float, ...]
+
+
+def _in_item_order(ctx: PlanningContext, config: Configuration) -> tuple[Placement, ...]:
+    by_name = config.by_name()
+    return tuple(by_name[i.name] for i in ctx.items)
+
+
+def evaluate(ctx: PlanningContext, config: Configuration, index: int,
+             policy: StandingPolicy = "utility",
+             rng: np.random.Generator | None = None) -> Candidate | str:
+    """The best plan for ``config``, or the reason none exists.
+
+    ``policy="uniform"`` draws each standing position uniformly from those within reach
+    (with ``rng``) instead of maximising utility; the order is still the cheapest.
+    """
+    placements = _in_item_order(ctx, config)
+    feas = ctx.place_feasibility(placements)
+    reason = ctx.unreachable_reason(placements, feas)
+    if reason is not None:
+        return reason
+    v, w = ctx.speed, ctx.options.w
+    field = np.array([p.field for p in ctx.pickups])
+    dist_in = ctx.dist_m[:, field].T
+    if policy == "uniform":
+        if rng is None:
+            raise ValueError("the uniform standing policy needs a random generator")
+        fixed = [int(rng.choice(np.flatnonzero(feas[j] > 0))) for j in range(len(placements))]
+        score = np.full_like(feas, -np.inf)
+        for j, s in enumerate(fixed):
+            score[j, s] = w * feas[j, s] - dist_in[j, s] / v
+    else:
+        score = np.where(feas > 0, w * feas - dist_in / v, -np.inf)
+    # out[j, k, s]: value of standing at s for j when the next pickup is field k.
+    out = score[:, None, :] - ctx.dist_m.T[None, :, :] / v
+    best_next = out.max(axis=2)
+    edge = -best_next[:, field]
+    np.fill_diagonal(edge, np.inf)
+    end = -score.max(axis=1)
+    first = ctx.start_dist_m[field] / v
+    names = [p.name for p in placements]
+    before = supports_before(names, {p.name: p.on for p in placements})
+    ordering = best_order(first, edge, end, before, names=names)
+    if not np.isfinite(ordering.cost):
+        return "no order of the objects has a collision-free plan"
+    order = ordering.order
+    stand, alts = [0] * len(order), [()] * len(order)
+    for pos, j in enumerate(order):
+        row = out[j, field[order[pos + 1]]] if pos + 1 < len(order) else score[j]
+        ranked = [int(s) for s in np.argsort(-row, kind="stable") if np.isfinite(row[s])]
+        stand[j] = ranked[0]
+        alts[j] = tuple(_spread(ctx, ranked[1:], ranked[0], ctx.options.alternatives))
+    place_p = [float(feas[j, stand[j]]) for j in range(len(order))]
+    utility = -ordering.cost - ctx.fixed_costs_s()
+    feasibility = float(np.prod(place_p))
+    cost_s = w * sum(place_p) - utility
+    return Candidate(index, placements, order, tuple(stand), tuple(alts), float(utility),
+                     feasibility, float(cost_s), tuple(place_p))
+
+
+def _spread(ctx: PlanningContext, ranked: Sequence[int], chosen: int, k: int,
+            min_gap_m: float = 0.3) -> list[int]:
+    """Up to ``k`` fallbacks from ``ranked``, each ``min_gap_m`` from the others and the
+    chosen one, so a chair that blocks one does not block them all."""
+    picked = [chosen]
+    for s in ranked:
+        if len(picked) > k:
+            break
+        if all(np.hypot(*(ctx.cand_xy[s] - ctx.cand_xy[t])) >= min_gap_m for t in picked):
+            picked.append(s)
+    return picked[1:]
+
+
+def choose(ctx: PlanningContext, configs: Sequence[Configuration],
+           policy: StandingPolicy = "utility", rng: np.random.Generator | None = None,
+           best_of_all: bool = True) -> Candidate:
+    """The configuration whose plan has the highest utility (``best_of_all``), or the first
+    one that has a plan; raises :class:`Infeasible` with the reason when none has."""
+    reasons: list[str] = []
+    best: Candidate | None = None
+    for i, config in enumerate(configs):
+        cand = evaluate(ctx, config, i, policy, rng)
+        if isinstance(cand, str):
+            reasons.append(cand)
+            continue
+        if best is None or cand.utility > best.utility:
+            best = cand
+        if not best_of_all:
+            break
+    if best is None:
+        raise Infeasible(f"no plan for any of {len(configs)} configuration(s): "
+                         f"{max(set(reasons), key=reasons.count)}")
+    return best
+
+
+def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed: int,
+               configurations: int) -> Plan:
+    """The chosen candidate as steps, with an OMPL path for every navigation leg.
+
+    With ``capacity > 1`` consecutive objects of the order share a trip: all pickups,
+    then all placements (the order and standing positions are those of capacity 1).
+    """
+    scene, robot = ctx.scene, ctx.scene.robot
+    steps: list[Step] = []
+    here = scene.robot_start
+    leg = 0
+
+    def go(goal: Pose2D, obj: str, alternatives: tuple[Pose2D, ...], p: float) -> Pose2D:
+        nonlocal here, leg
+        for g in (goal, *alternatives):
+            path = navigator.plan((here.x, here.y), (g.x, g.y), seed=seed * 1000 + leg)
+            if path is not None:
+                leg += 1
+                steps.append(Step("navigate", obj, goal=g, path=path, success_p=p,
+                                  duration_s=leg_duration_s(here, g, path, robot),
+                                  alternatives=tuple(a for a in alternatives if a != g)))
+                here = g
+                return g
+        raise Infeasible(f"no collision-free path to {'pick up' if p else 'place'} {obj!r} "
+                         f"from ({here.x:.2f}, {here.y:.2f})")
+
+    order = cand.order
+    cap = robot.capacity
+    for t in range(0, len(order), cap):
+        trip = order[t:t + cap]
+        for j in trip:
+            pu = ctx.pickups[j]
+            p_nav = float(ctx.model.navigation(np.array([pu.standing.clearance_m]))[0])
+            go(pu.standing.pose, pu.item, (), p_nav)
+            steps.append(Step("pick", pu.item, standing=pu.standing.pose,
+                              pose=(pu.source.x, pu.source.y, 0.0),
+                              duration_s=robot.pick_time_s,
+                              success_p=_manip(ctx, pu.standing.pose, (pu.source.x, pu.source.y))))
+        for j in trip:
+            p = cand.placements[j]
+            s = ctx.candidates[cand.stand[j]]
+            alts = tuple(ctx.candidates[a].pose for a in cand.alternatives[j])
+            stood = go(s.pose, p.name, alts, float(ctx.cand_nav_p[cand.stand[j]]))
+            target = ctx.targets_room([p])[0]
+            steps.append(Step("place", p.name, standing=stood, pose=(p.x, p.y, p.yaw),
+                              duration_s=robot.place_time_s,
+                              success_p=_manip(ctx, stood, (target[0], target[1]))))
+    names = tuple(cand.placements[j].name for j in order)
+    return Plan(order=names, steps=tuple(steps), configuration=cand.placements,
+                configuration_index=cand.index, utility=cand.utility,
+                feasibility=cand.feasibility, cost_s=cand.cost_s,
+                configurations_considered=configurations)
+
+
+def _manip(ctx: PlanningContext, stand: Pose2D, xy: tuple[float, float]) -> float:
+    """The feasibility model's success probability of a pick or place at ``xy`` from ``stand``."""
+    r = float(np.hypot(xy[0] - stand.x, xy[1] - stand.y))
+    return float(ctx.model.manipulation(np.array([r]), ctx.scene.robot)[0])

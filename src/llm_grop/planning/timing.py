@@ -1,0 +1,39 @@
+"""How long the robot takes to drive a path: the one time model of planner and simulator."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.robot import Robot
+
+
+def turning_rad(start: Pose2D, goal: Pose2D, path: Sequence[tuple[float, float]]) -> float:
+    """Radians turned in place driving ``path`` from ``start``: to each segment's heading,
+    then to the goal's heading."""
+    heading, total = start.theta, 0.0
+    for a, b in zip(path, path[1:], strict=False):
+        if math.dist(a, b) < 1e-9:
+            continue
+        h = math.atan2(b[1] - a[1], b[0] - a[0])
+        total += abs(wrap(h - heading))
+        heading = h
+    return total + abs(wrap(goal.theta - heading))
+
+
+def path_length_m(path: Sequence[tuple[float, float]]) -> float:
+    """Length of a polyline, metres."""
+    return sum(math.dist(a, b) for a, b in zip(path, path[1:], strict=False))
+
+
+def leg_duration_s(start: Pose2D, goal: Pose2D, path: Sequence[tuple[float, float]],
+                   robot: Robot) -> float:
+    """Seconds to drive ``path`` at the robot's speed, turning in place at its corners."""
+    return path_length_m(path) / robot.speed_mps \
+        + turning_rad(start, goal, path) / robot.turn_speed_radps
+
+
+def wrap(angle: float) -> float:
+    """``angle`` in radians wrapped to ``[-pi, pi)``."""
+    return (angle + math.pi) % (2 * math.pi) - math.pi

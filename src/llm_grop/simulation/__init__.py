@@ -1,0 +1,1 @@
+"""Executing plans: simulator backends and episode set-up."""

@@ -1,0 +1,204 @@
+"""A 2D kinematic simulator: the robot drives planned paths and its actions succeed or fail
+as the feasibility model says (uncertainty as a black box, as in the paper).
+
+* Navigation follows the path at the robot's speed, turning in place between segments.
+  It succeeds with the model's probability for the goal's true clearance (real chairs);
+  a failed attempt stops part-way and the robot replans from where it stopped. After
+  ``nav_attempts`` failures it tries the plan's next fallback standing position; when all
+  fail, the object is abandoned.
+* Arrival has Gaussian pose noise; picks and places succeed with the model's probability
+  for the real reach, retried up to ``manip_attempts`` times.
+* A placed object lands at its target plus small Gaussian noise. An object whose support
+  never arrived rests on the table. The final arrangement is read from where objects are.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from llm_grop.planning.feasibility import FeasibilityModel
+from llm_grop.planning.occupancy import Obstacles
+from llm_grop.planning.timing import leg_duration_s, path_length_m
+from llm_grop.simulation.base import PathPlanner
+from llm_grop.world.arrangement import Placement
+from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point, Step
+from llm_grop.world.scene import Scene
+
+
+@dataclass(frozen=True)
+class Kinematic2DOptions:
+    """Noise and retry settings.
+
+    Attributes:
+        nav_attempts: attempts per navigation goal (the authors used 3).
+        manip_attempts: attempts per pick or place.
+        nav_noise_std_m: standard deviation of the arrival position, per axis, metres.
+        heading_noise_std_rad: standard deviation of the arrival heading, radians.
+        place_noise_std_m: standard deviation of a placed object's position, metres.
+        place_yaw_noise_std_rad: standard deviation of a placed object's yaw, radians.
+        stop_fraction: a failed navigation stops this far along its path (uniform range).
+    """
+
+    nav_attempts: int = 3
+    manip_attempts: int = 5
+    nav_noise_std_m: float = 0.02
+    heading_noise_std_rad: float = 0.03
+    place_noise_std_m: float = 0.005
+    place_yaw_noise_std_rad: float = 0.02
+    stop_fraction: tuple[float, float] = (0.3, 0.9)
+
+
+class Kinematic2D:
+    """The 2D kinematic simulator (registered as ``kinematic2d``)."""
+
+    name = "kinematic2d"
+
+    def __init__(self, options: Kinematic2DOptions | None = None) -> None:
+        self.options = options or Kinematic2DOptions()
+
+    def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
+                replan: PathPlanner, model: FeasibilityModel) -> Execution:
+        """Run ``plan`` in ``scene``; its chairs are the real ones."""
+        run = _Run(self.options, plan, scene, rng, replan, model)
+        for step in plan.steps:
+            if step.object in run.abandoned:
+                continue
+            if step.action == "navigate":
+                run.navigate(step)
+            else:
+                run.manipulate(step)
+        order = {p.name: i for i, p in enumerate(plan.configuration)}
+        final = tuple(sorted(run.placed.values(), key=lambda p: order.get(p.name, 0)))
+        unplaced = tuple(n for n in plan.order if n not in run.placed)
+        return Execution(tuple(run.out), final, unplaced, run.time_s, run.pose)
+
+
+class _Run:
+    """The state of one execution."""
+
+    def __init__(self, options: Kinematic2DOptions, plan: Plan, scene: Scene,
+                 rng: np.random.Generator, replan: PathPlanner, model: FeasibilityModel) -> None:
+        self.o, self.plan, self.scene, self.rng = options, plan, scene, rng
+        self.replan, self.model, self.robot = replan, model, scene.robot
+        self.obstacles = Obstacles(scene, include_chairs=True)
+        self.pose = scene.robot_start
+        self.time_s = 0.0
+        self.out: list[ExecutedStep] = []
+        self.placed: dict[str, Placement] = {}
+        self.abandoned: set[str] = set()
+        self.targets = {p.name: p for p in plan.configuration}
+        self.legs = 0
+
+    def _clearance(self, x: float, y: float) -> float:
+        """Free distance, metres, from the base's footprint at ``(x, y)`` to any obstacle."""
+        return float(self.obstacles.clearance(np.array([[x, y]]))[0]) - self.robot.base_radius_m
+
+    def _path(self, goal: Pose2D, planned: tuple[Point, ...], first: bool) -> tuple[Point, ...]:
+        here = (self.pose.x, self.pose.y)
+        # After noisy arrival the robot is a few cm off the planned start: keep the plan
+        # when the detour to its second point is free, as a local planner would.
+        if first and len(planned) > 1 and math.dist(here, planned[0]) < 0.15 \
+                and self._segment_free(here, planned[1]):
+            return (here, *planned[1:])
+        self.legs += 1
+        seed = int(self.rng.integers(2**31))
+        path = self.replan.plan(here, (goal.x, goal.y), seed=seed)
+        return path if path is not None else ()
+
+    def _segment_free(self, a: Point, b: Point) -> bool:
+        n = max(2, int(math.dist(a, b) / 0.02) + 1)
+        pts = np.linspace(a, b, n)
+        return bool((self.obstacles.clearance(pts) >= self.robot.base_radius_m - 1e-6).all())
+
+    def navigate(self, step: Step) -> None:
+        assert step.goal is not None
+        for k, goal in enumerate((step.goal, *step.alternatives)):
+            p = float(self.model.navigation(np.array([self._clearance(goal.x, goal.y)]))[0])
+            for attempt in range(1, self.o.nav_attempts + 1):
+                path = self._path(goal, step.path, first=(k == 0 and attempt == 1))
+                if not path:
+                    self._record(ExecutedStep("navigate", False, 0.0, step.object, goal,
+                                              attempt=attempt, note="no path"))
+                    break
+                length = path_length_m(path)
+                if self.rng.random() < p:
+                    duration = leg_duration_s(self.pose, goal, path, self.robot)
+                    self._record(ExecutedStep("navigate", True, duration, step.object, goal,
+                                              path, attempt=attempt))
+                    self.pose = self._arrive(goal)
+                    return
+                frac = float(self.rng.uniform(*self.o.stop_fraction))
+                driven = _prefix(path, frac * length)
+                self._record(ExecutedStep("navigate", False, frac * length / self.robot.speed_mps,
+                                          step.object, goal, driven, attempt=attempt,
+                                          note="navigation failed"))
+                end = driven[-1]
+                heading = math.atan2(end[1] - driven[-2][1], end[0] - driven[-2][0]) \
+                    if len(driven) > 1 else self.pose.theta
+                self.pose = Pose2D(end[0], end[1], heading)
+        self.abandoned.add(step.object or "")
+
+    def _arrive(self, goal: Pose2D) -> Pose2D:
+        """Where the robot really stops: the goal plus noise, unless that collides."""
+        dx, dy = self.rng.normal(0.0, self.o.nav_noise_std_m, 2)
+        dth = float(self.rng.normal(0.0, self.o.heading_noise_std_rad))
+        noisy = Pose2D(goal.x + float(dx), goal.y + float(dy), goal.theta + dth)
+        return noisy if self._clearance(noisy.x, noisy.y) >= 0 else goal
+
+    def manipulate(self, step: Step) -> None:
+        name = step.object or ""
+        if step.action == "pick":
+            assert step.pose is not None
+            xy = (step.pose[0], step.pose[1])
+            duration = self.robot.pick_time_s
+        else:
+            t = self.targets[name]
+            q = self.scene.table_to_room(t.x, t.y)
+            xy, duration = (q.x, q.y), self.robot.place_time_s
+        reach = math.hypot(xy[0] - self.pose.x, xy[1] - self.pose.y)
+        p = float(self.model.manipulation(np.array([reach]), self.robot)[0])
+        standing = self.pose
+        for attempt in range(1, self.o.manip_attempts + 1):
+            ok = bool(self.rng.random() < p)
+            landed = self._land(name) if ok and step.action == "place" else None
+            self._record(ExecutedStep(
+                step.action, ok, duration, name, standing=standing,
+                pose=(landed.x, landed.y, landed.yaw) if landed else step.pose,
+                attempt=attempt, note="" if ok else f"{step.action} failed (reach {reach:.2f} m)"))
+            if ok:
+                if landed is not None:
+                    self.placed[name] = landed
+                return
+        self.abandoned.add(name)
+
+    def _land(self, name: str) -> Placement:
+        """The object as it lands: its target with noise, on its support if that is there."""
+        t = self.targets[name]
+        dx, dy = self.rng.normal(0.0, self.o.place_noise_std_m, 2)
+        dyaw = float(self.rng.normal(0.0, self.o.place_yaw_noise_std_rad))
+        on = t.on if t.on in self.placed else None
+        return Placement(t.name, t.x + float(dx), t.y + float(dy), t.yaw + dyaw, t.shape,
+                         t.size, on, t.kind, t.height)
+
+    def _record(self, step: ExecutedStep) -> None:
+        self.out.append(step)
+        self.time_s += step.duration_s
+
+
+def _prefix(path: tuple[Point, ...], distance_m: float) -> tuple[Point, ...]:
+    """The first ``distance_m`` metres of ``path``."""
+    out = [path[0]]
+    left = distance_m
+    for a, b in zip(path, path[1:], strict=False):
+        seg = math.dist(a, b)
+        if seg >= left:
+            f = left / seg if seg > 0 else 0.0
+            out.append((a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])))
+            return tuple(out)
+        out.append(b)
+        left -= seg
+    return tuple(out)

@@ -1,0 +1,189 @@
+"""Setting up an episode: where each requested object starts and which chairs stand around
+the target table (room frame, metres and radians).
+
+Everything is drawn from the generator it is given, so a seed fixes the episode; drawn
+positions are rounded to 0.1 mm, so the run JSON's scene reads back as the same scene. Chairs
+are drawn before the objects' starts, so the same seed gives the same chairs whatever is
+requested (methods compared on a seed see the same room).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from shapely.geometry import Point, Polygon
+from shapely.geometry import box as rect
+
+from llm_grop.errors import BadInput, Infeasible
+from llm_grop.world.arrangement import Item
+from llm_grop.world.geometry2d import Box
+from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
+from llm_grop.world.serialize import rounded
+
+#: Radius of the disc an object occupies on a supply table while it waits, metres.
+OBJECT_RADIUS_M = 0.06
+#: Clearance between a waiting object's disc and its table's edge, metres.
+EDGE_MARGIN_M = 0.05
+#: Extra clearance, beyond the base radius, between chairs and the robot's start, metres.
+START_CLEARANCE_M = 0.1
+#: Clearance kept around sampled chairs, metres, so rounding in JSON never makes one touch.
+CHAIR_CLEARANCE_M = 0.01
+#: Waiting objects lie at most this far, metres, from a table edge the robot can stand at,
+#: so that the arm reaches them comfortably.
+EDGE_BAND_M = 0.20
+#: Draws per chair and per object and table before giving up.
+TRIES = 200
+#: Times the whole set of chairs is drawn afresh before giving up.
+RESTARTS = 20
+
+
+def prepare_episode(scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
+                    chairs: int | None = None,
+                    chair_size_m: tuple[float, float] = (0.45, 0.45)) -> Scene:
+    """``scene`` set up for one episode with ``items``.
+
+    Every item gets one source: its own or its kind's from the scene (a kind's source
+    goes to the first item of that kind only), else a random spot on a supply table, the
+    items spread round-robin over the supply tables. With ``chairs`` an int, that many
+    chairs of ``chair_size_m`` (width, depth in metres) replace the scene's, on either long
+    side of the target table, their near edge ``scene.chair_band_m`` from the table's edge;
+    with ``None`` the scene's chairs stay.
+
+    Raises :class:`BadInput` for a negative ``chairs`` and :class:`Infeasible` when the
+    chairs or the objects do not fit.
+    """
+    if chairs is not None:
+        if chairs < 0:
+            raise BadInput(f"chairs: must not be negative, got {chairs}")
+        scene = scene.with_chairs(_sample_chairs(scene, chairs, chair_size_m, rng))
+    return scene.with_sources(_assign_sources(scene, items, rng))
+
+
+def _sample_chairs(scene: Scene, n: int, size: tuple[float, float],
+                   rng: np.random.Generator) -> tuple[Chair, ...]:
+    best: list[Chair] = []
+    # Chairs placed one by one can box each other out; starting over usually fits them.
+    for _ in range(RESTARTS):
+        chairs = _chair_round(scene, n, size, rng)
+        if len(chairs) == n:
+            return tuple(chairs)
+        best = max(best, chairs, key=len)
+    lo, hi = scene.chair_band_m
+    plural = "chair" if n == 1 else "chairs"
+    raise Infeasible(f"cannot place {n} {plural} near {scene.target!r}: at most {len(best)} "
+                     f"fit {lo:g}-{hi:g} m from its long sides")
+
+
+def _chair_round(scene: Scene, n: int, size: tuple[float, float],
+                 rng: np.random.Generator) -> list[Chair]:
+    """Up to ``n`` chairs placed one after another; fewer when one does not fit."""
+    table = scene.target_table.box
+    lo, hi = scene.chair_band_m
+    cw, cd = size
+    room = rect(0.0, 0.0, scene.width, scene.depth)
+    blocked = [_poly(b) for b in scene.static_obstacles()]
+    start = scene.robot_start
+    keep_off = Point(start.x, start.y).buffer(scene.robot.base_radius_m + START_CLEARANCE_M)
+    out: list[Chair] = []
+    for k in range(n):
+        for _ in range(TRIES):
+            side = 1.0 if rng.random() < 0.5 else -1.0
+            u = rng.uniform(-table.width / 2, table.width / 2)
+            v = side * (table.depth / 2 + rng.uniform(lo, hi) + cd / 2)
+            x, y = (rounded(c) for c in table.to_room(u, v))
+            box = Box(x, y, cw, cd, table.yaw)
+            grown = _poly(box).buffer(CHAIR_CLEARANCE_M, join_style="mitre")
+            if (room.contains(grown) and not grown.intersects(keep_off)
+                    and not any(grown.intersects(p) for p in blocked)):
+                out.append(Chair(f"chair {k + 1}", box))
+                blocked.append(_poly(box))
+                break
+        else:
+            return out
+    return out
+
+
+def _assign_sources(scene: Scene, items: Sequence[Item],
+                    rng: np.random.Generator) -> tuple[ObjectSource, ...]:
+    given: dict[str, ObjectSource] = {}
+    used: set[ObjectSource] = set()
+    for item in items:
+        s = scene.source_for(item.name, item.kind)
+        if s is not None and s not in used:
+            used.add(s)
+            given[item.name] = ObjectSource(item.name, s.table, s.x, s.y)
+    taken = [(s.x, s.y) for s in given.values()]
+    supply = scene.supply_tables
+    out: list[ObjectSource] = []
+    turn = 0
+    for item in items:
+        if item.name in given:
+            out.append(given[item.name])
+            continue
+        if not supply:
+            raise Infeasible(f"no supply table for {item.name!r}: the scene has no table "
+                             "besides the target")
+        for j in range(len(supply)):
+            table = supply[(turn + j) % len(supply)]
+            spot = _free_spot(scene, table, taken, rng)
+            if spot is not None:
+                break
+        else:
+            names = ", ".join(repr(t.name) for t in supply)
+            raise Infeasible(f"cannot fit {item.name!r} on the supply tables ({names})")
+        turn += 1
+        taken.append(spot)
+        out.append(ObjectSource(item.name, table.name, *spot))
+    return tuple(out)
+
+
+def _free_spot(scene: Scene, table: SceneTable, taken: list[tuple[float, float]],
+               rng: np.random.Generator) -> tuple[float, float] | None:
+    """A random room-frame point on ``table``, within :data:`EDGE_BAND_M` of an edge the
+    robot can stand at, whose object disc is clear of the edge and of the discs at
+    ``taken``; ``None`` when none turns up."""
+    box = table.box
+    inset = EDGE_MARGIN_M + OBJECT_RADIUS_M
+    hw, hd = box.width / 2 - inset, box.depth / 2 - inset
+    if hw < 0 or hd < 0:
+        return None
+    sides = _open_sides(scene, table)
+    if not sides:
+        return None
+    for _ in range(TRIES):
+        du, dv = sides[int(rng.integers(len(sides)))]
+        u, v = rng.uniform(-hw, hw), rng.uniform(-hd, hd)
+        # Pull the point towards the chosen open side, into the band along it.
+        if du:
+            u = du * (box.width / 2 - min(box.width / 2 - u * du, EDGE_BAND_M))
+            u = float(np.clip(u, -hw, hw))
+        else:
+            v = dv * (box.depth / 2 - min(box.depth / 2 - v * dv, EDGE_BAND_M))
+            v = float(np.clip(v, -hd, hd))
+        x, y = (rounded(c) for c in box.to_room(u, v))
+        if all(math.hypot(x - tx, y - ty) >= 2 * OBJECT_RADIUS_M for tx, ty in taken):
+            return (x, y)
+    return None
+
+
+def _open_sides(scene: Scene, table: SceneTable) -> list[tuple[int, int]]:
+    """The sides of ``table`` (as outward unit directions in its own frame) in front of
+    whose middle the robot's base fits."""
+    box = table.box
+    radius = scene.robot.base_radius_m
+    obstacles = [_poly(b) for b in scene.static_obstacles()]
+    room = rect(0.0, 0.0, scene.width, scene.depth)
+    out = []
+    for du, dv in ((0, -1), (0, 1), (-1, 0), (1, 0)):
+        gap = 0.1 + radius
+        x, y = box.to_room(du * (box.width / 2 + gap), dv * (box.depth / 2 + gap))
+        base = Point(x, y).buffer(radius)
+        if room.contains(base) and not any(base.intersects(p) for p in obstacles):
+            out.append((du, dv))
+    return out
+
+
+def _poly(b: Box) -> Polygon:
+    return Polygon(b.corners())

@@ -1,0 +1,148 @@
+"""Task-motion plans and what happened when one was executed (paper §III-C)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from llm_grop.world.arrangement import Arrangement, Placement
+from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.scene import Scene
+
+Action = Literal["navigate", "pick", "place"]
+Point = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class StandingPose:
+    """A candidate place for the robot's base next to a table.
+
+    ``pose`` is in the room frame, facing the table; ``clearance_m`` is the free distance
+    from the base's footprint to the nearest obstacle (tables, walls, sensed chairs), metres.
+    """
+
+    pose: Pose2D
+    clearance_m: float
+    table: str = ""
+
+
+@dataclass(frozen=True)
+class Step:
+    """One planned action.
+
+    Attributes:
+        action: ``navigate``, ``pick`` or ``place``.
+        object: the object picked or placed; for ``navigate``, the object this leg
+            fetches or delivers.
+        goal: the navigation goal (room frame), for ``navigate``.
+        path: the planned collision-free path (room-frame points, metres), for ``navigate``.
+        standing: where the base stands, for ``pick`` and ``place`` (room frame).
+        pose: the object's target ``(x, y, yaw)`` in the table frame, for ``place``;
+            its start ``(x, y, 0)`` in the room frame, for ``pick``.
+        duration_s: the expected duration without failures, seconds.
+        success_p: the feasibility model's success probability of this action.
+        alternatives: fallback navigation goals, best first, for ``navigate``.
+    """
+
+    action: Action
+    object: str | None = None
+    goal: Pose2D | None = None
+    path: tuple[Point, ...] = ()
+    standing: Pose2D | None = None
+    pose: tuple[float, float, float] | None = None
+    duration_s: float = 0.0
+    success_p: float = 1.0
+    alternatives: tuple[Pose2D, ...] = ()
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A task-motion plan for one configuration.
+
+    Attributes:
+        order: objects in the order they are placed.
+        steps: the actions.
+        configuration: the placements the plan realises (table frame).
+        configuration_index: which of the M configurations it is (0-based).
+        utility: expected utility, ``w * feasibility - cost`` summed over objects.
+        feasibility: the probability that every action succeeds first time.
+        cost_s: expected duration without failures (navigation and manipulation), seconds.
+        configurations_considered: how many configurations were planned for (M).
+    """
+
+    order: tuple[str, ...]
+    steps: tuple[Step, ...]
+    configuration: tuple[Placement, ...]
+    configuration_index: int
+    utility: float
+    feasibility: float
+    cost_s: float
+    configurations_considered: int = 1
+
+
+@dataclass(frozen=True)
+class ExecutedStep:
+    """One action as the simulator executed it (an attempt; failures are kept).
+
+    ``path`` is the driven path (room frame); ``pose`` for ``place`` is where the object
+    really landed, table frame; ``attempt`` counts from 1; ``note`` says why it failed.
+    """
+
+    action: Action
+    ok: bool
+    duration_s: float
+    object: str | None = None
+    goal: Pose2D | None = None
+    path: tuple[Point, ...] = ()
+    standing: Pose2D | None = None
+    pose: tuple[float, float, float] | None = None
+    attempt: int = 1
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Execution:
+    """What a simulator reports after executing a plan.
+
+    ``final`` holds the objects where they really are (table frame); ``unplaced`` the
+    objects that never reached the table; ``execution_time_s`` the simulated seconds.
+    """
+
+    steps: tuple[ExecutedStep, ...]
+    final: tuple[Placement, ...]
+    unplaced: tuple[str, ...]
+    execution_time_s: float
+    robot_end: Pose2D
+
+    @property
+    def success(self) -> bool:
+        """Whether every object reached the table."""
+        return not self.unplaced
+
+    @property
+    def failures(self) -> int:
+        """How many actions failed."""
+        return sum(not s.ok for s in self.steps)
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """One episode (the contract's run JSON): the planned arrangement, the plan, its
+    execution, the final arrangement, planning time in seconds (LLM calls excluded) and the
+    scene with the chairs that were sensed."""
+
+    method: str
+    task: int | None
+    seed: int
+    request: str
+    planned: Arrangement
+    plan: Plan
+    execution: Execution
+    final: Arrangement
+    planning_time_s: float
+    scene: Scene
+
+    @property
+    def success(self) -> bool:
+        """Whether every object reached the table."""
+        return self.execution.success

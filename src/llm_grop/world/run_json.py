@@ -1,0 +1,79 @@
+"""The contract's run JSON (``llm-grop run --json``), written from a :class:`RunResult`.
+
+Besides the contract's fields it holds the planned arrangement, the plan's expected
+utility, feasibility and cost, the failures, and the scene with the sensed chairs. For
+the same seed and inputs it is identical except for measured wall times
+(``planning_time_s`` and the LLM calls' ``latency_s``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.plan import ExecutedStep, Plan, RunResult
+from llm_grop.world.scene_file import scene_to_dict
+from llm_grop.world.serialize import arrangement_to_dict, rounded
+
+
+def pose_list(p: Pose2D) -> list[float]:
+    """``[x, y, theta]`` rounded to 0.1 mm / 0.1 mrad."""
+    return [rounded(p.x), rounded(p.y), rounded(p.theta)]
+
+
+def executed_step_to_dict(s: ExecutedStep) -> dict[str, Any]:
+    """One executed action (failed attempts included)."""
+    out: dict[str, Any] = {"action": s.action}
+    if s.object is not None:
+        out["object"] = s.object
+    if s.goal is not None:
+        out["goal"] = pose_list(s.goal)
+    if s.standing is not None:
+        out["standing"] = pose_list(s.standing)
+    if s.pose is not None:
+        out["pose"] = [rounded(v) for v in s.pose]
+    out |= {"duration_s": round(s.duration_s, 3), "ok": s.ok, "attempt": s.attempt}
+    if s.note:
+        out["note"] = s.note
+    if s.path:
+        out["path"] = [[rounded(x), rounded(y)] for x, y in s.path]
+    return out
+
+
+def plan_to_dict(plan: Plan) -> dict[str, Any]:
+    """The chosen plan: order, standing positions and its expected utility, feasibility and
+    cost (seconds), and which of the M configurations it realises."""
+    standing = {s.object: pose_list(s.standing) for s in plan.steps
+                if s.action == "place" and s.standing is not None}
+    return {
+        "order": list(plan.order),
+        "standing": [{"object": o, "pose": standing[o]} for o in plan.order if o in standing],
+        "configuration_index": plan.configuration_index,
+        "configurations": plan.configurations_considered,
+        "expected_utility": round(plan.utility, 3),
+        "feasibility": round(plan.feasibility, 4),
+        "expected_cost_s": round(plan.cost_s, 3),
+        "expected_duration_s": round(sum(s.duration_s for s in plan.steps), 3),
+    }
+
+
+def run_to_dict(r: RunResult, simulator: str = "kinematic2d") -> dict[str, Any]:
+    """The run JSON as a dict."""
+    ex = r.execution
+    planned = arrangement_to_dict(r.planned)
+    final = arrangement_to_dict(r.final)
+    final.pop("llm", None)
+    return {
+        "method": r.method, "task": r.task, "seed": r.seed, "request": r.request,
+        "success": ex.success,
+        "execution_time_s": round(ex.execution_time_s, 3),
+        "planning_time_s": round(r.planning_time_s, 4),
+        "failures": ex.failures,
+        "unplaced": list(ex.unplaced),
+        "steps": [executed_step_to_dict(s) for s in ex.steps],
+        "final": final,
+        "plan": plan_to_dict(r.plan),
+        "planned": planned,
+        "simulator": simulator,
+        "scene": scene_to_dict(r.scene),
+    }

@@ -1,0 +1,146 @@
+"""The dining room: walls, tables, chairs and where the tableware starts (room frame).
+
+Room frame: the map frame, metres and radians; the room spans ``[0, width] x [0, depth]``
+and its outer walls are its boundary. The *target table* is the one to be set; its own
+frame is the contract's table frame (origin at the top's centre, +y away from the diner,
+who sits at its -y edge). Chairs are not part of the pre-built map: a planner senses them
+at planning time (see :meth:`Scene.static_obstacles`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+from llm_grop.world.geometry2d import Box, Pose2D
+from llm_grop.world.robot import Robot
+from llm_grop.world.table import Table
+
+
+@dataclass(frozen=True)
+class SceneTable:
+    """A table in the room: ``name`` and its top ``box`` (room frame); ``height`` in metres."""
+
+    name: str
+    box: Box
+    height: float = 0.75
+
+
+@dataclass(frozen=True)
+class Chair:
+    """A chair: its footprint ``box`` in the room frame. Not in the pre-built map."""
+
+    name: str
+    box: Box
+
+
+@dataclass(frozen=True)
+class ObjectSource:
+    """Where one requested object starts: on table ``table`` at room-frame ``(x, y)`` metres.
+
+    ``object`` is an item name ("dinner fork 2") or a catalog kind ("dinner fork").
+    """
+
+    object: str
+    table: str
+    x: float
+    y: float
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A dining room.
+
+    Attributes:
+        name: a label.
+        width, depth: room size in metres (x and y extent).
+        walls: interior walls as boxes (the outer walls are the room's boundary).
+        tables: every table, the target included.
+        target: the name of the table to set.
+        source_tables: tables the tableware may start on (default: every other table).
+        sources: where objects start; objects not listed are assigned to a source table.
+        chairs: chairs in the room, sensed at planning time.
+        robot_start: the robot's start pose.
+        robot: the robot's parameters.
+        chair_band_m: chairs are sampled between these distances (metres) from the target
+            table's long sides.
+    """
+
+    name: str
+    width: float
+    depth: float
+    tables: tuple[SceneTable, ...]
+    target: str
+    robot_start: Pose2D
+    walls: tuple[Box, ...] = ()
+    source_tables: tuple[str, ...] = ()
+    sources: tuple[ObjectSource, ...] = ()
+    chairs: tuple[Chair, ...] = ()
+    robot: Robot = field(default_factory=Robot)
+    chair_band_m: tuple[float, float] = (0.0, 1.0)
+
+    def table(self, name: str) -> SceneTable:
+        """The table called ``name``; ``KeyError`` if there is none."""
+        for t in self.tables:
+            if t.name == name:
+                return t
+        raise KeyError(name)
+
+    @property
+    def target_table(self) -> SceneTable:
+        """The table to set."""
+        return self.table(self.target)
+
+    @property
+    def target_top(self) -> Table:
+        """The target table's top as the arrangement's :class:`Table` (width, depth)."""
+        box = self.target_table.box
+        return Table(box.width, box.depth)
+
+    @property
+    def supply_tables(self) -> tuple[SceneTable, ...]:
+        """Tables the tableware may start on."""
+        names = self.source_tables or tuple(t.name for t in self.tables if t.name != self.target)
+        return tuple(self.table(n) for n in names)
+
+    def static_obstacles(self) -> tuple[Box, ...]:
+        """The pre-built map's obstacles: interior walls and every table (no chairs)."""
+        return self.walls + tuple(t.box for t in self.tables)
+
+    def source_for(self, item: str, kind: str) -> ObjectSource | None:
+        """Where item ``item`` (of catalog kind ``kind``) starts, if the scene says."""
+        for s in self.sources:
+            if s.object == item:
+                return s
+        for s in self.sources:
+            if s.object == kind:
+                return s
+        return None
+
+    def with_chairs(self, chairs: tuple[Chair, ...]) -> Scene:
+        """This scene with ``chairs`` instead of its own."""
+        return replace(self, chairs=chairs)
+
+    def with_sources(self, sources: tuple[ObjectSource, ...]) -> Scene:
+        """This scene with ``sources`` instead of its own."""
+        return replace(self, sources=sources)
+
+    def table_to_room(self, x: float, y: float, yaw: float = 0.0) -> Pose2D:
+        """A table-frame pose of the target table in the room frame."""
+        box = self.target_table.box
+        rx, ry = box.to_room(x, y)
+        return Pose2D(rx, ry, _wrap(yaw + box.yaw))
+
+    def room_to_table(self, x: float, y: float, theta: float = 0.0) -> tuple[float, float, float]:
+        """A room-frame pose in the target table's frame, as ``(x, y, yaw)``."""
+        box = self.target_table.box
+        u, v = box.to_local(x, y)
+        return (u, v, _wrap(theta - box.yaw))
+
+
+def _wrap(angle: float) -> float:
+    """``angle`` in radians wrapped to ``(-pi, pi]``."""
+    a = math.fmod(angle + math.pi, 2 * math.pi)
+    if a <= 0:
+        a += 2 * math.pi
+    return a - math.pi

@@ -1,0 +1,286 @@
+"""Dining-room scene files (YAML) and their JSON form; errors name the file and the field.
+
+The file's layout (room frame: metres and radians, the room spans ``[0, width] x
+[0, depth]``)::
+
+    name: dining room
+    room: {width: 8.0, depth: 6.0}
+    walls: [{center: [x, y], size: [w, d], yaw: 0.0}]
+    tables: [{name: dining table, center: [x, y], size: [w, d], yaw: 0.0, height: 0.75}]
+    target: dining table
+    source_tables: [kitchen counter]                      # optional
+    sources: [{object: mug, table: kitchen counter, position: [x, y]}]   # optional
+    chairs: [{center: [x, y], size: [w, d], yaw: 0.0}]    # optional, "chair 1", ...
+    chair_band_m: [0.0, 1.0]                              # optional
+    robot: {start: [x, y, theta], base_radius_m: 0.3, ...}  # all optional
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import fields
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any
+
+import shapely
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    FiniteFloat,
+    NonNegativeFloat,
+    PositiveFloat,
+    StrictInt,
+    StringConstraints,
+)
+from shapely.geometry import Point, Polygon
+from shapely.geometry import box as rect
+
+from llm_grop.errors import BadInput
+from llm_grop.world.datafile import load_yaml_model
+from llm_grop.world.geometry2d import Box, Pose2D
+from llm_grop.world.robot import Robot
+from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
+from llm_grop.world.serialize import rounded
+
+#: Overlaps shallower than this (metres) are ignored, so that touching shapes and
+#: values rounded to 0.1 mm in JSON still load.
+_TOL_M = 1e-3
+
+_Name = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]
+_XY = tuple[FiniteFloat, FiniteFloat]
+_Size = tuple[PositiveFloat, PositiveFloat]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class _Room(_Strict):
+    width: PositiveFloat
+    depth: PositiveFloat
+
+
+class _Wall(_Strict):
+    center: _XY
+    size: _Size
+    yaw: FiniteFloat = 0.0
+
+
+class _Table(_Wall):
+    name: _Name
+    height: PositiveFloat = 0.75
+
+
+class _Chair(_Wall):
+    name: _Name | None = None
+
+
+class _Source(_Strict):
+    object: _Name
+    table: _Name
+    position: _XY
+
+
+class _Robot(_Strict):
+    start: tuple[FiniteFloat, FiniteFloat, FiniteFloat] = (0.5, 0.5, 0.0)
+    base_radius_m: FiniteFloat | None = None
+    reach_min_m: FiniteFloat | None = None
+    reach_max_m: FiniteFloat | None = None
+    speed_mps: FiniteFloat | None = None
+    turn_speed_radps: FiniteFloat | None = None
+    pick_time_s: FiniteFloat | None = None
+    place_time_s: FiniteFloat | None = None
+    capacity: StrictInt | None = None
+
+
+class _SceneModel(_Strict):
+    name: _Name | None = None
+    room: _Room
+    walls: list[_Wall] = []
+    tables: list[_Table]
+    target: _Name
+    source_tables: list[_Name] = []
+    sources: list[_Source] = []
+    chairs: list[_Chair] = []
+    chair_band_m: tuple[NonNegativeFloat, NonNegativeFloat] = (0.0, 1.0)
+    robot: _Robot = Field(default_factory=_Robot)
+
+
+def parse_scene(text: str, where: str) -> Scene:
+    """The scene in YAML ``text``; ``where`` names its file in errors.
+
+    Raises :class:`BadInput` with one line ``<where>: <field path>: <reason>``.
+    """
+    m = load_yaml_model(text, where, _SceneModel, "tables", "name")
+
+    def fail(path: str, reason: str) -> BadInput:
+        return BadInput(f"{where}: {path}: {reason}")
+
+    if not m.tables:
+        raise fail("tables", "no tables; list at least the target table")
+    names = [t.name for t in m.tables]
+    listed = ", ".join(names)
+    for k, name in enumerate(names):
+        if name in names[:k]:
+            raise fail(f"tables[{k}] ({name!r}).name", f"table {name!r} is listed twice")
+    if m.target not in names:
+        raise fail("target", f"no table named {m.target!r} (tables: {listed})")
+    for k, name in enumerate(m.source_tables):
+        if name not in names:
+            raise fail(f"source_tables[{k}]", f"no table named {name!r} (tables: {listed})")
+        if name == m.target:
+            raise fail(f"source_tables[{k}]", f"{name!r} is the target table, not a supply table")
+        if name in m.source_tables[:k]:
+            raise fail(f"source_tables[{k}]", f"{name!r} is listed twice")
+    lo, hi = m.chair_band_m
+    if lo > hi:
+        raise fail("chair_band_m", f"lower bound {lo} exceeds upper bound {hi}")
+
+    room = rect(0.0, 0.0, m.room.width, m.room.depth)
+    size = f"{m.room.width:g} x {m.room.depth:g} m"
+    walls = tuple(_box(w) for w in m.walls)
+    wall_polys = [_poly(b) for b in walls]
+    tables = tuple(SceneTable(t.name, _box(t), t.height) for t in m.tables)
+    table_polys = [_poly(t.box) for t in tables]
+    for k, poly in enumerate(table_polys):
+        path = f"tables[{k}] ({names[k]!r})"
+        if not _inside(poly, room):
+            raise fail(path, f"extends outside the room ({size})")
+        for j in range(k):
+            if _overlap(poly, table_polys[j]):
+                raise fail(path, f"overlaps table {names[j]!r}")
+        for j, wall in enumerate(wall_polys):
+            if _overlap(poly, wall):
+                raise fail(path, f"overlaps wall {j + 1}")
+
+    chairs = tuple(Chair(c.name or f"chair {k + 1}", _box(c)) for k, c in enumerate(m.chairs))
+    for k, chair in enumerate(chairs):
+        path, poly = f"chairs[{k}] ({chair.name!r})", _poly(chair.box)
+        if not _inside(poly, room):
+            raise fail(path, f"extends outside the room ({size})")
+        for name, other in zip(names, table_polys, strict=True):
+            if _overlap(poly, other):
+                raise fail(path, f"overlaps table {name!r}")
+        for j, wall in enumerate(wall_polys):
+            if _overlap(poly, wall):
+                raise fail(path, f"overlaps wall {j + 1}")
+
+    sources = tuple(ObjectSource(s.object, s.table, *s.position) for s in m.sources)
+    for k, s in enumerate(sources):
+        path = f"sources[{k}] ({s.object!r})"
+        if s.table not in names:
+            raise fail(f"{path}.table", f"no table named {s.table!r} (tables: {listed})")
+        if s.table == m.target:
+            raise fail(f"{path}.table", f"{s.table!r} is the target table, not a supply table")
+        at = f"({s.x:g}, {s.y:g})"
+        if not (0.0 <= s.x <= m.room.width and 0.0 <= s.y <= m.room.depth):
+            raise fail(f"{path}.position", f"{at} is outside the room ({size})")
+        for j, wall in enumerate(walls):
+            if wall.contains(s.x, s.y):
+                raise fail(f"{path}.position", f"inside wall {j + 1}")
+        if not tables[names.index(s.table)].box.contains(s.x, s.y, _TOL_M):
+            raise fail(f"{path}.position", f"{at} is not on the top of table {s.table!r}")
+
+    params = {k: v for k, v in m.robot.model_dump().items() if k != "start" and v is not None}
+    try:
+        robot = Robot(**params)
+    except BadInput as exc:
+        raise BadInput(f"{where}: {exc}") from None
+    start = Pose2D(*m.robot.start)
+    reason = _start_blocked(start, robot.base_radius_m, room, walls, tables, chairs)
+    if reason:
+        raise fail("robot.start", reason)
+
+    return Scene(
+        name=m.name or "dining room", width=m.room.width, depth=m.room.depth,
+        tables=tables, target=m.target, robot_start=start, walls=walls,
+        source_tables=tuple(m.source_tables), sources=sources, chairs=chairs, robot=robot,
+        chair_band_m=(lo, hi))
+
+
+def load_scene(path: str | os.PathLike[str] | None = None) -> Scene:
+    """The scene in YAML file ``path``, or the packaged dining room when ``None``.
+
+    Raises :class:`BadInput` for a file that cannot be read or is malformed.
+    """
+    if path is None:
+        packaged = resources.files("llm_grop").joinpath("data/scenes/dining_room.yaml")
+        return parse_scene(packaged.read_text(encoding="utf-8"), "packaged dining_room.yaml")
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise BadInput(f"scene: cannot read {str(path)!r}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise BadInput(f"scene: cannot read {str(path)!r}: not UTF-8 text") from None
+    return parse_scene(text, str(path))
+
+
+def scene_to_dict(scene: Scene) -> dict[str, Any]:
+    """``scene`` as a JSON-ready dict in the scene file's layout (metres and radians
+    rounded to 0.1 mm / 0.1 mrad); :func:`parse_scene` reads it back."""
+    def box(b: Box) -> dict[str, Any]:
+        return {"center": [rounded(b.x), rounded(b.y)],
+                "size": [rounded(b.width), rounded(b.depth)], "yaw": rounded(b.yaw)}
+
+    chairs = []
+    for k, c in enumerate(scene.chairs):
+        # The file names chairs "chair 1", ... itself; other names must be kept.
+        named = {} if c.name == f"chair {k + 1}" else {"name": c.name}
+        chairs.append(named | box(c.box))
+    robot: dict[str, Any] = {"start": [rounded(v) for v in scene.robot_start.as_list()]}
+    for f in fields(Robot):
+        value = getattr(scene.robot, f.name)
+        robot[f.name] = value if isinstance(value, int) else rounded(value)
+    return {
+        "name": scene.name,
+        "room": {"width": rounded(scene.width), "depth": rounded(scene.depth)},
+        "walls": [box(w) for w in scene.walls],
+        "tables": [{"name": t.name} | box(t.box) | {"height": rounded(t.height)}
+                   for t in scene.tables],
+        "target": scene.target,
+        "source_tables": list(scene.source_tables),
+        "sources": [{"object": s.object, "table": s.table,
+                     "position": [rounded(s.x), rounded(s.y)]} for s in scene.sources],
+        "chairs": chairs,
+        "chair_band_m": [rounded(v) for v in scene.chair_band_m],
+        "robot": robot,
+    }
+
+
+def _box(m: _Wall) -> Box:
+    return Box(m.center[0], m.center[1], m.size[0], m.size[1], m.yaw)
+
+
+def _poly(b: Box) -> Polygon:
+    """``b``'s footprint as a shapely polygon (room frame, metres)."""
+    return Polygon(b.corners())
+
+
+def _overlap(a: shapely.Geometry, b: shapely.Geometry) -> bool:
+    """Whether ``a`` and ``b`` overlap by more than the tolerance (touching is fine)."""
+    return bool(a.buffer(-_TOL_M, join_style="mitre").intersects(b))
+
+
+def _inside(a: shapely.Geometry, room: Polygon) -> bool:
+    return bool(room.buffer(_TOL_M, join_style="mitre").contains(a))
+
+
+def _start_blocked(start: Pose2D, radius: float, room: Polygon, walls: tuple[Box, ...],
+                   tables: tuple[SceneTable, ...], chairs: tuple[Chair, ...]) -> str | None:
+    """Why the base (a disc of ``radius`` metres) cannot stand at ``start``, or ``None``."""
+    disc = Point(start.x, start.y).buffer(radius)
+    at = f"the base (radius {radius:g} m) at ({start.x:g}, {start.y:g})"
+    if not _inside(disc, room):
+        return f"{at} crosses the room's outer wall"
+    for j, wall in enumerate(walls):
+        if _overlap(disc, _poly(wall)):
+            return f"{at} collides with wall {j + 1}"
+    for t in tables:
+        if _overlap(disc, _poly(t.box)):
+            return f"{at} collides with table {t.name!r}"
+    for c in chairs:
+        if _overlap(disc, _poly(c.box)):
+            return f"{at} collides with {c.name}"
+    return None

@@ -1,0 +1,34 @@
+"""Small hand-built dining rooms shared by the planning, simulation and method tests."""
+
+from __future__ import annotations
+
+from llm_grop.world.arrangement import Configuration, Placement
+from llm_grop.world.geometry2d import Box, Pose2D
+from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
+
+
+def two_table_room(chairs: tuple[Chair, ...] = (), sources: tuple[ObjectSource, ...] = ()
+                   ) -> Scene:
+    """A 6 x 4 m room: the 0.9 x 0.6 m dining table at (3, 2), a counter at the west wall."""
+    return Scene(
+        name="test room", width=6.0, depth=4.0,
+        tables=(SceneTable("dining table", Box(3.0, 2.0, 0.9, 0.6)),
+                SceneTable("counter", Box(0.4, 2.0, 0.5, 1.2))),
+        target="dining table", robot_start=Pose2D(1.5, 0.6, 0.0),
+        sources=sources or (ObjectSource("dinner plate", "counter", 0.45, 2.1),
+                            ObjectSource("bread", "counter", 0.45, 1.8),
+                            ObjectSource("dinner fork", "counter", 0.45, 2.4),
+                            ObjectSource("dinner knife", "counter", 0.45, 1.6),
+                            ObjectSource("mug", "counter", 0.45, 2.5)),
+        chairs=chairs)
+
+
+def placement(name: str, x: float, y: float, shape: str = "circle",
+              size: tuple[float, float] = (0.27, 0.27), on: str | None = None) -> Placement:
+    """A placement on the table (table frame, metres)."""
+    return Placement(name, x, y, 0.0, shape, size, on, name, 0.02)  # type: ignore[arg-type]
+
+
+def config(*placements: Placement) -> Configuration:
+    """A configuration from placements."""
+    return Configuration(tuple(placements))

@@ -1,0 +1,110 @@
+"""``llm-grop run``: the run JSON, the picture, the summary and bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from llm_grop.cli import main
+from scripted import TASK1_GOOD, scripted
+
+REQUEST = "set the table with a dinner plate, a dinner fork and a dinner knife"
+
+
+def _openai(server) -> list[str]:
+    return ["--llm", "openai", "--base-url", server.url, "--retries", "0"]
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+def test_run_writes_run_json_and_picture(chat_server, tmp_path: Path, capsys,
+                                         monkeypatch) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD])
+    out_json, out_png = tmp_path / "run.json", tmp_path / "run.png"
+    code = main(["run", "--task", "1", *_openai(chat_server), "--seed", "2",
+                 "--json", str(out_json), "--image", str(out_png)])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "execution time" in printed and "planning time" in printed
+    data = json.loads(out_json.read_text())
+    for key in ("method", "task", "seed", "success", "execution_time_s", "planning_time_s",
+                "steps", "final"):
+        assert key in data
+    assert data["method"] == "llm-grop" and data["task"] == 1 and data["seed"] == 2
+    assert data["steps"][0]["action"] == "navigate"
+    assert {"table", "objects"} <= set(data["final"])
+    assert len(data["scene"]["chairs"]) == 1
+    assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_baseline_runs_without_an_llm(tmp_path: Path) -> None:
+    out = tmp_path / "run.json"
+    assert main(["run", REQUEST, "--method", "grop", "--llm", "openai",
+                 "--base-url", "http://127.0.0.1:9", "--json", str(out), "-q"]) == 0
+    assert json.loads(out.read_text())["method"] == "grop"
+
+
+def _scene(tmp_path: Path, text: str) -> str:
+    path = tmp_path / "scene.yaml"
+    path.write_text(text)
+    return str(path)
+
+
+ROOM = """
+name: test
+room: {width: 6.0, depth: 4.0}
+tables:
+  - {name: dining table, center: [3.0, 2.0], size: [0.9, 0.6]}
+  - {name: counter, center: [0.4, 2.0], size: [0.5, 1.2]}
+target: dining table
+robot: {start: [1.5, 0.6, 0.0]}
+"""
+
+
+@pytest.mark.parametrize(("scene", "extra", "code", "needle"), [
+    (ROOM.replace("target: dining table", "target: kitchen table"), [], 2, "target"),
+    (ROOM + "sources:\n  - {object: dinner plate, table: counter, position: [0.4, 3.99]}\n",
+     [], 2, "sources[0]"),
+    (ROOM + "walls:\n  - {center: [0.4, 3.0], size: [0.6, 0.1]}\n"
+     "sources:\n  - {object: dinner plate, table: counter, position: [0.4, 3.0]}\n",
+     [], 2, "sources[0]"),
+    (ROOM + "chairs:\n  - {center: [3.0, 2.55], size: [1.6, 0.4]}\n"
+     "  - {center: [3.0, 1.45], size: [1.6, 0.4]}\n"
+     "  - {center: [2.3, 2.0], size: [0.4, 0.8]}\n"
+     "  - {center: [3.7, 2.0], size: [0.4, 0.8]}\n", [], 1, "dining table"),
+])
+def test_bad_scenes(tmp_path: Path, capsys, scene: str, extra: list[str], code: int,
+                    needle: str) -> None:
+    args = ["run", REQUEST, "--method", "grop", "--scene", _scene(tmp_path, scene), "-q"]
+    assert main(args + extra) == code
+    assert needle in _one_line_error(capsys)
+
+
+def test_object_out_of_every_reach(tmp_path: Path, capsys) -> None:
+    # One object is placed at the centre (no LLM call is needed); on a 2.4 x 2 m table
+    # the centre is 1 m from every edge, beyond the arm's reach from any side.
+    scene = _scene(tmp_path, ROOM.replace("[0.9, 0.6]", "[2.4, 2.0]")
+                   .replace("[1.5, 0.6, 0.0]", "[0.6, 0.4, 0.0]"))
+    args = ["run", "set the table with a fruit bowl", "--scene", scene, "--llm", "openai",
+            "--base-url", "http://127.0.0.1:9", "-q"]
+    assert main(args) == 1
+    assert "no standing position can reach 'fruit bowl'" in _one_line_error(capsys)
+
+
+@pytest.mark.parametrize(("args", "needle"), [
+    (["run"], "give a REQUEST or --task N"),
+    (["run", REQUEST, "--method", "magic"], "unknown method 'magic'"),
+    (["run", REQUEST, "--scene", "/nonexistent/scene.yaml"], "scene.yaml"),
+])
+def test_bad_flags(capsys, args: list[str], needle: str) -> None:
+    assert main(args) == 2
+    assert needle in _one_line_error(capsys)
