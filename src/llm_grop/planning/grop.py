@@ -27,6 +27,13 @@ from llm_grop.world.plan import Plan, Step
 
 StandingPolicy = Literal["utility", "uniform"]
 
+#: Up to this many objects the order is found exactly for every configuration.
+EXACT_LIMIT = 12
+#: Beyond it, every configuration gets the local-search order, and the ``REFINE`` best
+#: get a branch-and-bound search of up to ``NODE_BUDGET`` nodes.
+REFINE = 2
+NODE_BUDGET = 10_000
+
 
 @dataclass(frozen=True)
 class Candidate:
@@ -42,6 +49,7 @@ class Candidate:
     feasibility: float
     cost_s: float
     place_p: tuple[float, ...]
+    order_optimal: bool = True
 
 
 def _in_item_order(ctx: PlanningContext, config: Configuration) -> tuple[Placement, ...]:
@@ -50,12 +58,13 @@ def _in_item_order(ctx: PlanningContext, config: Configuration) -> tuple[Placeme
 
 
 def evaluate(ctx: PlanningContext, config: Configuration, index: int,
-             policy: StandingPolicy = "utility",
-             rng: np.random.Generator | None = None) -> Candidate | str:
+             policy: StandingPolicy = "utility", rng: np.random.Generator | None = None,
+             node_budget: int = NODE_BUDGET) -> Candidate | str:
     """The best plan for ``config``, or the reason none exists.
 
     ``policy="uniform"`` draws each standing position uniformly from those within reach
     (with ``rng``) instead of maximising utility; the order is still the cheapest.
+    ``node_budget`` bounds the order search beyond :data:`EXACT_LIMIT` objects.
     """
     placements = _in_item_order(ctx, config)
     feas = ctx.place_feasibility(placements)
@@ -83,14 +92,16 @@ def evaluate(ctx: PlanningContext, config: Configuration, index: int,
     first = ctx.start_dist_m[field] / v
     names = [p.name for p in placements]
     before = supports_before(names, {p.name: p.on for p in placements})
-    ordering = best_order(first, edge, end, before, names=names)
+    ordering = best_order(first, edge, end, before, names=names, exact_limit=EXACT_LIMIT,
+                          node_budget=node_budget)
     if not np.isfinite(ordering.cost):
         return "no order of the objects has a collision-free plan"
     order = ordering.order
     stand, alts = [0] * len(order), [()] * len(order)
     for pos, j in enumerate(order):
         row = out[j, field[order[pos + 1]]] if pos + 1 < len(order) else score[j]
-        ranked = [int(s) for s in np.argsort(-row, kind="stable") if np.isfinite(row[s])]
+        ranked_all = np.argsort(-row, kind="stable")
+        ranked = [int(s) for s in ranked_all[np.isfinite(row[ranked_all])]]
         stand[j] = ranked[0]
         alts[j] = tuple(_spread(ctx, ranked[1:], ranked[0], ctx.options.alternatives))
     place_p = [float(feas[j, stand[j]]) for j in range(len(order))]
@@ -98,7 +109,7 @@ def evaluate(ctx: PlanningContext, config: Configuration, index: int,
     feasibility = float(np.prod(place_p))
     cost_s = w * sum(place_p) - utility
     return Candidate(index, placements, order, tuple(stand), tuple(alts), float(utility),
-                     feasibility, float(cost_s), tuple(place_p))
+                     feasibility, float(cost_s), tuple(place_p), ordering.optimal)
 
 
 def _spread(ctx: PlanningContext, ranked: Sequence[int], chosen: int, k: int,
@@ -119,21 +130,25 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
            best_of_all: bool = True) -> Candidate:
     """The configuration whose plan has the highest utility (``best_of_all``), or the first
     one that has a plan; raises :class:`Infeasible` with the reason when none has."""
+    large = len(ctx.items) > EXACT_LIMIT
     reasons: list[str] = []
-    best: Candidate | None = None
+    found: list[Candidate] = []
     for i, config in enumerate(configs):
-        cand = evaluate(ctx, config, i, policy, rng)
+        cand = evaluate(ctx, config, i, policy, rng, node_budget=0 if large else NODE_BUDGET)
         if isinstance(cand, str):
             reasons.append(cand)
             continue
-        if best is None or cand.utility > best.utility:
-            best = cand
+        found.append(cand)
         if not best_of_all:
             break
-    if best is None:
+    if not found:
         raise Infeasible(f"no plan for any of {len(configs)} configuration(s): "
                          f"{max(set(reasons), key=reasons.count)}")
-    return best
+    if large and policy == "utility":
+        top = sorted(found, key=lambda c: -c.utility)[:REFINE]
+        refined = [evaluate(ctx, configs[c.index], c.index, policy) for c in top]
+        found = [c for c in refined if not isinstance(c, str)] + found
+    return max(found, key=lambda c: (c.utility, -c.index))
 
 
 def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed: int,

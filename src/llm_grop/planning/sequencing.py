@@ -61,7 +61,7 @@ def _check_acyclic(n: int, preds: list[int], names: Sequence[str]) -> None:
 
 def best_order(first: ArrayLike, edge: ArrayLike, end: ArrayLike,
                before: Sequence[tuple[int, int]] = (), *, names: Sequence[str] | None = None,
-               exact_limit: int = 12, node_budget: int = 50_000) -> Ordering:
+               exact_limit: int = 12, node_budget: int = 10_000) -> Ordering:
     """The order of least cost with every ``(a, b)`` of ``before`` keeping ``a`` before ``b``.
 
     ``first[j]``: cost of starting with ``j``; ``edge[i, j]``: of ``j`` right after ``i``;
@@ -85,42 +85,51 @@ def best_order(first: ArrayLike, edge: ArrayLike, end: ArrayLike,
 
 
 def _held_karp(f: np.ndarray, e: np.ndarray, z: np.ndarray, preds: list[int]) -> Ordering:
+    """Exact dynamic programming over subsets, one layer of equal-sized subsets at a time."""
     n = len(f)
     full = 1 << n
     dp = np.full((full, n), np.inf)
     parent = np.full((full, n), -1, dtype=np.int64)
-    for j in range(n):
-        if preds[j] == 0:
-            dp[1 << j, j] = f[j]
-    pred_arr = np.array(preds)
-    bits = 1 << np.arange(n)
+    pred_arr = np.array(preds, dtype=np.int64)
+    bits = np.int64(1) << np.arange(n, dtype=np.int64)
+    starts = np.flatnonzero(pred_arr == 0)
+    dp[bits[starts], starts] = f[starts]
+    all_masks = np.arange(full, dtype=np.int64)
+    size = np.zeros(full, dtype=np.int64)
+    for b in bits:
+        size += (all_masks & b) > 0
     expanded = 0
-    for mask in range(1, full):
-        row = dp[mask]
-        if not np.isfinite(row).any():
-            continue
-        expanded += 1
-        # via[i, k]: reach k next with i last.
-        via = row[:, None] + e
-        best_last = np.argmin(via, axis=0)
-        best = via[best_last, np.arange(n)]
-        allowed = ((mask & bits) == 0) & ((pred_arr & ~mask) == 0) & np.isfinite(best)
-        for k in np.flatnonzero(allowed):
-            nxt = mask | int(bits[k])
-            if best[k] < dp[nxt, k]:
-                dp[nxt, k] = best[k]
-                parent[nxt, k] = best_last[k]
+    for k in range(1, n):
+        masks = all_masks[size == k]
+        rows = dp[masks]
+        live = np.isfinite(rows).any(axis=1)
+        masks, rows = masks[live], rows[live]
+        expanded += len(masks)
+        if not len(masks):
+            break
+        via = rows[:, :, None] + e[None, :, :]
+        last = np.argmin(via, axis=1)
+        best = np.take_along_axis(via, last[:, None, :], axis=1)[:, 0, :]
+        allowed = ((masks[:, None] & bits[None, :]) == 0) \
+            & ((pred_arr[None, :] & ~masks[:, None]) == 0) & np.isfinite(best)
+        s_idx, nxt = np.nonzero(allowed)
+        target = masks[s_idx] | bits[nxt]
+        value = best[s_idx, nxt]
+        # With repeated targets the last write wins, so write the smallest value last.
+        order = np.argsort(-value, kind="stable")
+        dp[target[order], nxt[order]] = value[order]
+        parent[target[order], nxt[order]] = last[s_idx, nxt][order]
     total = dp[full - 1] + z
-    last = int(np.argmin(total))
-    if not np.isfinite(total[last]):
+    end = int(np.argmin(total))
+    if not np.isfinite(total[end]):
         return Ordering(tuple(range(n)), float("inf"), True, expanded)
-    order, mask = [last], full - 1
-    while len(order) < n:
-        prev = int(parent[mask, order[-1]])
-        mask &= ~(1 << order[-1])
-        order.append(prev)
-    order.reverse()
-    return Ordering(tuple(order), float(total[last]), True, expanded)
+    seq, mask = [end], full - 1
+    while len(seq) < n:
+        prev = int(parent[mask, seq[-1]])
+        mask &= ~(1 << seq[-1])
+        seq.append(prev)
+    seq.reverse()
+    return Ordering(tuple(seq), float(total[end]), True, expanded)
 
 
 def _feasible(order: Sequence[int], preds: list[int]) -> bool:
@@ -166,10 +175,6 @@ def _branch_and_bound(f: np.ndarray, e: np.ndarray, z: np.ndarray, preds: list[i
     n = len(f)
     incumbent = _greedy(f, e, z, preds)
     best = _cost(incumbent, f, e, z)
-    finite_e = np.where(np.isfinite(e), e, np.inf)
-    # A lower bound on what the objects still to place cost: each needs an arrival.
-    min_in = np.minimum(finite_e.min(axis=0), f)
-    min_end = float(np.min(z))
     expanded = 0
     exhausted = False
     stack: list[tuple[list[int], int, float]] = [([], 0, 0.0)]
@@ -184,12 +189,22 @@ def _branch_and_bound(f: np.ndarray, e: np.ndarray, z: np.ndarray, preds: list[i
             if total < best - 1e-12:
                 best, incumbent = float(total), order
             continue
-        rest = [j for j in range(n) if not seen >> j & 1]
-        bound = cost + float(min_in[rest].sum()) + min_end
+        rest = np.array([j for j in range(n) if not seen >> j & 1])
+        # Every object still to place needs an arrival: from the last one placed or from
+        # another object still to place; and the plan still has to end.
+        if order:
+            into = e[np.append(rest, order[-1])][:, rest]
+            np.fill_diagonal(into, np.inf)
+            arrivals = into.min(axis=0)
+        else:
+            into = e[np.ix_(rest, rest)].copy()
+            np.fill_diagonal(into, np.inf)
+            arrivals = np.minimum(into.min(axis=0), f[rest])
+        bound = cost + float(arrivals.sum()) + float(z[rest].min())
         if bound >= best - 1e-12:
             continue
         step = f if not order else e[order[-1]]
-        ready = [j for j in rest if preds[j] & ~seen == 0 and np.isfinite(step[j])]
+        ready = [int(j) for j in rest if preds[j] & ~seen == 0 and np.isfinite(step[j])]
         for j in sorted(ready, key=lambda k: -step[k]):
             stack.append((order + [j], seen | 1 << j, cost + float(step[j])))
     return Ordering(tuple(incumbent), best, not exhausted, expanded)
