@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -16,7 +16,7 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import items_from_names, parse_request
 from llm_grop.world.scene import Scene
 from llm_grop.world.table import Table
-from llm_grop.world.tasks import get_task, load_tasks
+from llm_grop.world.tasks import Task, get_task, load_tasks
 
 if TYPE_CHECKING:
     from llm_grop.planning.utility import GropOptions
@@ -32,11 +32,12 @@ def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
     return CallLog(backend, Path(record) if record is not None else None)
 
 
-def resolve_items(request: str | None, task: int | None,
-                  catalog: Catalog) -> tuple[str, tuple[Item, ...]]:
-    """The request's text and its items, from ``request`` or the paper's Table I ``task``."""
+def resolve_items(request: str | None, task: int | None, catalog: Catalog,
+                  tasks: Mapping[int, Task] | None = None) -> tuple[str, tuple[Item, ...]]:
+    """The request's text and its items, from ``request`` or ``task``: an id of ``tasks``
+    (default: the paper's Table I)."""
     if task is not None:
-        t = get_task(task, load_tasks())
+        t = get_task(task, tasks if tasks is not None else load_tasks())
         return request or t.request, tuple(items_from_names(t.objects, catalog))
     if request is not None:
         parsed = parse_request(request, catalog)
@@ -70,6 +71,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         catalog_files: Sequence[str | PathLike[str]] = (),
         options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
         simulator: str = "kinematic2d", planner: GropOptions | None = None,
+        tasks: Mapping[int, Task] | None = None,
         on_event: Callable[[str], None] | None = None) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
 
@@ -77,7 +79,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     room. ``chairs`` chairs are sampled near the target table for this seed (``None``
     keeps the scene file's own chairs, or samples one if it has none); the robot senses
     them at planning time.
-    ``method`` is one of :func:`available_methods`. The same seed gives the same run.
+    ``method`` is one of :func:`available_methods`; ``tasks`` replaces the paper's Table I
+    for ``task``. The same seed gives the same run.
     """
     # Planning pulls in OMPL and scipy; import them only when a run needs them.
     import numpy as np
@@ -89,7 +92,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     from llm_grop.world.scene_file import load_scene
 
     catalog = catalog or Catalog.load(catalog_files)
-    text, items = resolve_items(request, task, catalog)
+    text, items = resolve_items(request, task, catalog, tasks)
     chosen = get_method(method)
     sim = create_simulator(simulator)
     base = scene if isinstance(scene, Scene) else load_scene(scene)

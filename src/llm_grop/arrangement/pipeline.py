@@ -12,7 +12,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from llm_grop.arrangement import consistency, distances, geometry, relations, sampling
+from llm_grop.arrangement import (
+    consistency,
+    distances,
+    geometry,
+    preferences,
+    relations,
+    sampling,
+)
 from llm_grop.errors import LLMError
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
@@ -44,6 +51,8 @@ class ArrangeOptions:
     notes: str = ""
     params: SamplingParams = field(default_factory=SamplingParams)
     reprompt_temperature_step: float = 0.3
+    preferences: tuple[str, ...] = ()
+    preference_pool: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -159,7 +168,11 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
     attempts: list[Attempt] = []
     accepted: tuple[Relation, ...] = ()
     dropped: list[Relation] = []
-    if len(items) > 1:
+    prefs = preferences.read_preferences(options.preferences, options.preference_pool,
+                                         items, catalog)
+    if preferences.covers(prefs, items):
+        say("the preferences relate every object: Template 1 is not asked")
+    elif len(items) > 1:
         for k in range(options.max_attempts):
             say(f"asking {llm.model} for symbolic relations "
                 f"(attempt {k + 1}/{options.max_attempts})")
@@ -180,6 +193,10 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
                          for r in dropped]
         for attempt in attempts:
             warnings += [f"ignored LLM line: {line}" for line in attempt.ignored if line]
+    if prefs:
+        accepted, overridden = preferences.merge(prefs, accepted)
+        warnings += [f"overridden by a preference: {r.line or r.sentence()}"
+                     for r in overridden]
 
     gaps: dict[tuple[str, str, str | None], float] = {}
     for k, rel in enumerate(accepted):

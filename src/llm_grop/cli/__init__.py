@@ -8,7 +8,9 @@ import sys
 import click
 
 from llm_grop.cli.arrange import arrange
+from llm_grop.cli.bench import bench
 from llm_grop.cli.options import EPILOG
+from llm_grop.cli.rate import rate
 from llm_grop.cli.run import run
 from llm_grop.errors import LLMGropError
 
@@ -21,12 +23,14 @@ def cli() -> None:
 
 cli.add_command(arrange)
 cli.add_command(run)
+cli.add_command(bench)
+cli.add_command(rate)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point: runs the command, printing one line and no traceback on failure."""
     try:
-        cli.main(args=argv, prog_name="llm-grop", standalone_mode=False)
+        code = cli.main(args=argv, prog_name="llm-grop", standalone_mode=False)
     except click.exceptions.Abort:
         click.echo("llm-grop: interrupted", err=True)
         return 130
@@ -50,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
         click.echo(f"llm-grop: internal error: {type(exc).__name__}: {exc} "
                    "(set LLM_GROP_DEBUG=1 for a traceback)", err=True)
         return 3
-    return 0
+    return code if isinstance(code, int) else 0
 
 
 if __name__ == "__main__":

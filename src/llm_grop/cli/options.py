@@ -32,6 +32,13 @@ _LLM_OPTIONS = [
                  help="Template 1 prompts before keeping the largest consistent subset."),
     click.option("--zero-shot", is_flag=True, help="Leave the paper's few-shot examples out."),
     click.option("--notes", default="", help="Text for Template 1's [notes] slot."),
+    click.option("--prefer", "prefer", multiple=True, metavar="SENTENCE",
+                 help="A relation you want, e.g. 'the dinner fork to the left of the dinner "
+                      "plate'; it wins over the LLM (repeatable)."),
+    click.option("--preferences", "preferences_file",
+                 type=click.Path(dir_okay=False, path_type=Path),
+                 help="YAML file `preferences: [sentences]`; those whose objects are all "
+                      "requested apply."),
     click.option("--temperature", default=0.1, show_default=True, type=float),
     click.option("--top-p", default=1.0, show_default=True, type=float),
     click.option("--max-tokens", default=512, show_default=True, type=click.IntRange(1)),
@@ -55,6 +62,7 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
                  replay_path: Path | None, m: int, attempts: int, zero_shot: bool, notes: str,
                  temperature: float, top_p: float, max_tokens: int, frequency_penalty: float,
                  presence_penalty: float, timeout_s: float, retries: int,
+                 prefer: tuple[str, ...] = (), preferences_file: Path | None = None,
                  **_: Any) -> tuple[Any, Any]:
     """``(BackendOptions, ArrangeOptions)`` from the flags of :func:`llm_flags`."""
     from llm_grop.arrangement.pipeline import ArrangeOptions
@@ -63,8 +71,12 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
     if backend == "replay" and replay_path is None:
         raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
     params = SamplingParams(temperature, top_p, max_tokens, frequency_penalty, presence_penalty)
+    from llm_grop.arrangement.preferences import load_preference_file
+
+    pool = load_preference_file(preferences_file) if preferences_file is not None else ()
     options = ArrangeOptions(m=m, max_attempts=attempts, examples="" if zero_shot else None,
-                             notes=notes, params=params)
+                             notes=notes, params=params, preferences=tuple(prefer),
+                             preference_pool=pool)
     llm_options = BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
                                  max_retries=retries, replay_path=replay_path)
     return llm_options, options

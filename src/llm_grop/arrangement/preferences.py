@@ -1,0 +1,91 @@
+"""Symbolic relations a user states as preferences (paper §III-A: relations come from the
+LLM or from the user).
+
+Preferences are sentences in the paper's own phrasing ("the dinner fork to the left of
+the dinner plate", "mug lid on top of mug"), read by the same reader as the LLM's answers.
+They win over the LLM: an LLM relation about a pair the user spoke of is dropped, and so
+is one that clingo finds inconsistent with the preferences. When the preferences mention
+every requested object, Template 1 is not asked at all; Template 2 still asks the LLM
+for the distances.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import yaml
+
+from llm_grop.arrangement import consistency
+from llm_grop.arrangement.relations import parse_relations
+from llm_grop.errors import BadInput
+from llm_grop.world.arrangement import Item
+from llm_grop.world.catalog import Catalog
+from llm_grop.world.relation import Relation
+
+
+def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequence[Item],
+                     catalog: Catalog) -> tuple[Relation, ...]:
+    """The relations of the ``required`` sentences (each must name requested objects, else
+    :class:`BadInput`) and of those ``pool`` sentences whose objects are all requested.
+
+    Raises :class:`BadInput` when the preferences contradict each other.
+    """
+    out: list[Relation] = []
+    for sentence in required:
+        parsed = parse_relations(sentence, items, catalog)
+        if not parsed.relations or parsed.ignored:
+            raise BadInput(f"--prefer: cannot read {sentence!r} as a relation between "
+                           f"requested objects ({', '.join(i.name for i in items)})")
+        out += parsed.relations
+    for sentence in pool:
+        parsed = parse_relations(sentence, items, catalog)
+        if not parsed.ignored:
+            out += parsed.relations
+    seen: set[tuple[str, str, str | None]] = set()
+    unique = []
+    for r in out:
+        if r.key() not in seen:
+            seen.add(r.key())
+            unique.append(r)
+    conflict = consistency.check(unique).conflict
+    if conflict:
+        lines = "; ".join(r.line or r.sentence() for r in conflict)
+        raise BadInput(f"preferences contradict each other: {lines}")
+    return tuple(unique)
+
+
+def covers(preferences: Sequence[Relation], items: Sequence[Item]) -> bool:
+    """Whether every requested object is mentioned by some preference."""
+    named = {r.subject for r in preferences} | {r.reference for r in preferences}
+    return bool(preferences) and all(i.name in named for i in items)
+
+
+def merge(preferences: Sequence[Relation], llm: Sequence[Relation]
+          ) -> tuple[tuple[Relation, ...], tuple[Relation, ...]]:
+    """``(kept, overridden)``: the preferences, then every LLM relation that is about
+    another pair and consistent with what is kept so far."""
+    pairs = {frozenset((r.subject, r.reference)) for r in preferences}
+    kept = list(preferences)
+    overridden = []
+    for r in llm:
+        if frozenset((r.subject, r.reference)) in pairs \
+                or consistency.check([*kept, r]).conflict:
+            overridden.append(r)
+        else:
+            kept.append(r)
+    return tuple(kept), tuple(overridden)
+
+
+def load_preference_file(path: str | Path) -> tuple[str, ...]:
+    """The sentences of a preferences file: YAML ``preferences: [sentence, ...]``."""
+    try:
+        raw = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise BadInput(f"preferences {path}: cannot read ({exc.strerror})") from None
+    except yaml.YAMLError:
+        raise BadInput(f"preferences {path}: not valid YAML") from None
+    items = raw.get("preferences") if isinstance(raw, dict) else None
+    if not isinstance(items, list) or not all(isinstance(s, str) and s.strip() for s in items):
+        raise BadInput(f"preferences {path}: preferences: expected a list of sentences")
+    return tuple(s.strip() for s in items)

@@ -1,0 +1,145 @@
+"""``llm-grop bench``: the paper's experiment (§IV), resumable, with a summary and plots."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import click
+
+from llm_grop.cli.options import EPILOG, llm_flags, llm_settings
+from llm_grop.errors import BadInput
+
+
+def parse_tasks(text: str, known: dict[int, Any]) -> tuple[int, ...]:
+    """``"1-8"``, ``"1,3,5"``, or a tag such as ``paper`` or ``smoke`` -> task ids."""
+    ids: list[int] = []
+    for part in (p.strip() for p in text.split(",")):
+        if not part:
+            continue
+        if part[0].isdigit():
+            lo, _, hi = part.partition("-")
+            try:
+                span = range(int(lo), int(hi or lo) + 1)
+            except ValueError:
+                raise BadInput(f"--tasks: {part!r} is not a task number or range") from None
+            ids += span
+        else:
+            tagged = [t for t, task in known.items() if part in task.tags]
+            if not tagged:
+                tags = sorted({g for task in known.values() for g in task.tags})
+                raise BadInput(f"--tasks: no task is tagged {part!r} (tags: {', '.join(tags)})")
+            ids += tagged
+    unknown = [t for t in ids if t not in known]
+    if unknown:
+        raise BadInput(f"--tasks: unknown task {unknown[0]} "
+                       f"(tasks: {', '.join(map(str, known))})")
+    if not ids:
+        raise BadInput("--tasks: no task given")
+    return tuple(dict.fromkeys(ids))
+
+
+def parse_methods(text: str) -> tuple[str, ...]:
+    """``"tpra,grop"`` -> registered method names (unknown ones are bad input)."""
+    from llm_grop.methods.registry import get_method
+
+    names = tuple(dict.fromkeys(get_method(m).name for m in text.split(",") if m.strip()))
+    if not names:
+        raise BadInput("--methods: no method given")
+    return names
+
+
+@click.command(epilog=EPILOG)
+@click.option("--tasks", "tasks_text", default="paper", show_default=True,
+              help="Task ids, ranges or tags: 1-8, 1,3,5, paper, smoke.")
+@click.option("--trials", default=20, show_default=True, type=click.IntRange(1),
+              help="Trials per task and method.")
+@click.option("--methods", "methods_text", default="tpra,latp,grop,llm-grop",
+              show_default=True, help="Comma-separated methods.")
+@click.option("--out", "out_dir", default=Path("bench"), show_default=True,
+              type=click.Path(file_okay=False, path_type=Path),
+              help="Results directory; rerunning into it resumes.")
+@click.option("--workers", default=1, show_default=True, type=click.IntRange(1),
+              help="Worker processes.")
+@click.option("--seed", default=0, show_default=True, help="Seed of trial 0 (trial k: seed+k).")
+@click.option("--scene", "scene_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Dining-room scene YAML (default: the packaged dining room).")
+@click.option("--chairs", default=1, show_default=True, type=click.IntRange(0),
+              help="Chairs sampled near the table in every trial.")
+@click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
+              help="GROP's utility weight w (seconds per unit of success probability).")
+@click.option("--task-file", "task_files", multiple=True,
+              type=click.Path(dir_okay=False, path_type=Path),
+              help="Extra tasks (YAML, like the packaged tasks.yaml); repeatable.")
+@click.option("--no-images", is_flag=True, help="Do not draw each trial's final table.")
+@llm_flags
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
+def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
+          seed: int, scene_path: Path | None, chairs: int, w: float,
+          task_files: tuple[Path, ...], no_images: bool, record_path: Path | None,
+          catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
+    """Run the paper's experiment: tasks x trials x methods, rated 1-5 (paper §IV)."""
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    from llm_grop.evaluation.experiment import Experiment, run_experiment, write_reports
+    from llm_grop.evaluation.trial import TrialSettings
+    from llm_grop.world.scene_file import load_scene
+    from llm_grop.world.tasks import load_tasks
+
+    if record_path is not None:
+        raise BadInput("--record: not available for bench; record with `llm-grop run` or "
+                       "benchmarks/record_embedded.py")
+    known = load_tasks(task_files)
+    tasks = parse_tasks(tasks_text, known)
+    methods = parse_methods(methods_text)
+    llm_options, options = llm_settings(**flags)
+    if scene_path is not None:
+        load_scene(scene_path)  # a bad scene is reported before any trial runs
+    settings = TrialSettings(
+        backend=flags["backend"], llm_options=llm_options, arrange=options,
+        scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,
+        task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
+        images=None if no_images else str(out_dir / "images"))
+    exp = Experiment(tasks, trials, methods, settings, seed)
+    console = Console(stderr=True)
+    progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                        TimeElapsedColumn(), TimeRemainingColumn(), console=console,
+                        disable=quiet)
+    bar = progress.add_task("trials", total=None)
+
+    def on_start(pending: int, skipped: int) -> None:
+        progress.update(bar, total=pending)
+        if skipped and not quiet:
+            console.print(f"resuming: {skipped} trial(s) already in {out_dir}")
+
+    def on_row(row: dict[str, Any]) -> None:
+        progress.update(bar, advance=1, description=(
+            f"task {row['task']} trial {row['trial']} {row['method']}: "
+            f"rating {row['rating']}"))
+
+    t0 = time.perf_counter()
+    with progress:
+        outcome = run_experiment(exp, out_dir, workers=workers, on_start=on_start,
+                                 on_row=on_row)
+    wall = time.perf_counter() - t0
+    if outcome.interrupted:
+        console.print(f"interrupted: {len(outcome.rows)} finished trial(s) are saved in "
+                      f"{out_dir / 'trials.jsonl'}; rerun the same command to resume")
+        raise click.exceptions.Exit(130)
+    summary = write_reports(out_dir, outcome.rows)
+    if not quiet:
+        from llm_grop.evaluation.summary import print_summary
+
+        out = Console()
+        print_summary(summary, out)
+        out.print(f"{outcome.ran} trial(s) run, {outcome.skipped} already done, "
+                  f"{wall:.1f} s with {workers} worker(s); results in {out_dir}")

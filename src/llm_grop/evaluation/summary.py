@@ -1,0 +1,292 @@
+"""Aggregate benchmark trials into the paper's figures of merit (Sec. IV).
+
+The benchmark writes one JSON row per trial, with at least ``method`` (str), ``task``
+(int), ``success`` (bool), ``rating`` (1-5), ``execution_time_s`` (seconds, ``None``
+when no plan existed), ``planning_time_s`` (seconds, or ``None``) and ``status``.
+:func:`summarize` reduces them to means and standard errors per method (Fig. 3: rating
+against execution time) and per method and task (Fig. 5: mean rating per task).
+Standard errors are the sample standard deviation (``n - 1`` in the denominator)
+divided by ``sqrt(n)``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table as RichTable
+
+from llm_grop.errors import BadInput
+
+#: The paper's methods, in the order its figures list them; others follow, first seen first.
+PAPER_ORDER = ("tpra", "latp", "grop", "llm-grop")
+
+_NONE = "-"
+
+
+@dataclass(frozen=True)
+class Stat:
+    """Mean and standard error of ``n`` values, in the values' own unit.
+
+    ``mean`` is NaN when ``n == 0``; ``se`` (sample standard deviation / sqrt(n)) is
+    NaN when ``n < 2``.
+    """
+
+    mean: float
+    se: float
+    n: int
+
+
+def stat(values: Iterable[float | int | bool | None]) -> Stat:
+    """The :class:`Stat` of ``values``, ignoring ``None`` (booleans count as 0 or 1)."""
+    xs = [float(v) for v in values if v is not None]
+    n = len(xs)
+    if n == 0:
+        return Stat(math.nan, math.nan, 0)
+    mean = math.fsum(xs) / n
+    if n < 2:
+        return Stat(mean, math.nan, n)
+    var = math.fsum((x - mean) ** 2 for x in xs) / (n - 1)
+    return Stat(mean, math.sqrt(var) / math.sqrt(n), n)
+
+
+@dataclass(frozen=True)
+class MethodSummary:
+    """All trials of one method.
+
+    ``rating`` is on the 1-5 scale; ``execution_time_s`` and ``planning_time_s`` are in
+    seconds, over the trials that have them; ``success_rate`` is the mean of 0/1 success
+    (a fraction, 0-1); ``trials`` counts every row of the method.
+    """
+
+    method: str
+    rating: Stat
+    execution_time_s: Stat
+    planning_time_s: Stat
+    success_rate: Stat
+    trials: int
+
+
+@dataclass(frozen=True)
+class TaskSummary:
+    """The trials of one method on one task: ``rating`` (1-5), ``execution_time_s`` (s)."""
+
+    method: str
+    task: int
+    rating: Stat
+    execution_time_s: Stat
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Per-method results (``methods``, in display order) and per-(method, task) results.
+
+    ``per_task`` holds one :class:`TaskSummary` for each (method, task) pair that has
+    trials, ordered by method (as in ``methods``) then by task ascending.
+    """
+
+    methods: tuple[MethodSummary, ...]
+    per_task: tuple[TaskSummary, ...]
+
+    @property
+    def method_names(self) -> tuple[str, ...]:
+        """The methods, in display order."""
+        return tuple(m.method for m in self.methods)
+
+    @property
+    def tasks(self) -> tuple[int, ...]:
+        """Every task that has a trial, ascending."""
+        return tuple(sorted({t.task for t in self.per_task}))
+
+    def method(self, name: str) -> MethodSummary | None:
+        """The summary of method ``name``, or ``None`` if it has no trial."""
+        return next((m for m in self.methods if m.method == name), None)
+
+    def cell(self, method: str, task: int) -> TaskSummary | None:
+        """The results of ``method`` on ``task``, or ``None`` if it has no trial there."""
+        return next((t for t in self.per_task if t.method == method and t.task == task), None)
+
+    def task_table(self) -> dict[tuple[str, int], tuple[Stat, Stat]]:
+        """A fresh ``{(method, task): (rating, execution_time_s)}`` mapping."""
+        return {(t.method, t.task): (t.rating, t.execution_time_s) for t in self.per_task}
+
+
+@dataclass(frozen=True)
+class _Row:
+    method: str
+    task: int
+    success: bool
+    rating: float | None
+    execution_time_s: float | None
+    planning_time_s: float | None
+
+
+def summarize(rows: Iterable[Mapping[str, Any]]) -> Summary:
+    """Summarize benchmark rows (one per trial) per method and per (method, task).
+
+    Methods come in the paper's order (:data:`PAPER_ORDER`) first, then any others in the
+    order first seen; tasks ascending. ``None`` ratings and times are left out of their
+    statistics. Raises :class:`BadInput` (naming the row, counted from 1, and the field)
+    if a row lacks a field or holds a value of the wrong type or range.
+    """
+    parsed = [_parse(row, i) for i, row in enumerate(rows, 1)]
+    seen: dict[str, None] = {}
+    for r in parsed:
+        seen.setdefault(r.method, None)
+    order = [m for m in PAPER_ORDER if m in seen] + [m for m in seen if m not in PAPER_ORDER]
+    methods: list[MethodSummary] = []
+    per_task: list[TaskSummary] = []
+    for name in order:
+        mine = [r for r in parsed if r.method == name]
+        methods.append(MethodSummary(
+            method=name,
+            rating=stat(r.rating for r in mine),
+            execution_time_s=stat(r.execution_time_s for r in mine),
+            planning_time_s=stat(r.planning_time_s for r in mine),
+            success_rate=stat(r.success for r in mine),
+            trials=len(mine)))
+        for task in sorted({r.task for r in mine}):
+            on_task = [r for r in mine if r.task == task]
+            per_task.append(TaskSummary(name, task, stat(r.rating for r in on_task),
+                                        stat(r.execution_time_s for r in on_task)))
+    return Summary(tuple(methods), tuple(per_task))
+
+
+def _parse(row: Mapping[str, Any], index: int) -> _Row:
+    where = f"benchmark row {index}"
+    if not isinstance(row, Mapping):
+        raise BadInput(f"{where}: expected an object, got {type(row).__name__}")
+
+    def field(name: str) -> Any:
+        if name not in row:
+            raise BadInput(f"{where}: missing field {name!r}")
+        return row[name]
+
+    method = field("method")
+    if not isinstance(method, str) or not method:
+        raise BadInput(f"{where}: 'method' must be a non-empty string, got {method!r}")
+    task = field("task")
+    if isinstance(task, bool) or not isinstance(task, int):
+        raise BadInput(f"{where}: 'task' must be an integer, got {task!r}")
+    success = field("success")
+    if not isinstance(success, bool):
+        raise BadInput(f"{where}: 'success' must be true or false, got {success!r}")
+    rating = _number(field("rating"), where, "rating")
+    if rating is not None and not 1.0 <= rating <= 5.0:
+        raise BadInput(f"{where}: 'rating' must be between 1 and 5, got {rating:g}")
+    return _Row(method, task, success, rating,
+                _seconds(row.get("execution_time_s"), where, "execution_time_s"),
+                _seconds(row.get("planning_time_s"), where, "planning_time_s"))
+
+
+def _number(value: Any, where: str, name: str) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise BadInput(f"{where}: {name!r} must be a finite number or null, got {value!r}")
+    return float(value)
+
+
+def _seconds(value: Any, where: str, name: str) -> float | None:
+    x = _number(value, where, name)
+    if x is not None and x < 0:
+        raise BadInput(f"{where}: {name!r} must not be negative, got {x:g}")
+    return x
+
+
+def _stat_dict(s: Stat) -> dict[str, float | int | None]:
+    return {"mean": None if math.isnan(s.mean) else s.mean,
+            "se": None if math.isnan(s.se) else s.se, "n": s.n}
+
+
+def summary_to_dict(summary: Summary) -> dict[str, Any]:
+    """``summary`` as plain JSON values; NaN (no value, or no SE) becomes ``None``.
+
+    Times stay in seconds (keys ending in ``_s``); ``success_rate`` is a fraction (0-1).
+    """
+    return {
+        "methods": [{"method": m.method, "trials": m.trials,
+                     "rating": _stat_dict(m.rating),
+                     "execution_time_s": _stat_dict(m.execution_time_s),
+                     "planning_time_s": _stat_dict(m.planning_time_s),
+                     "success_rate": _stat_dict(m.success_rate)} for m in summary.methods],
+        "tasks": list(summary.tasks),
+        "per_task": [{"method": t.method, "task": t.task, "rating": _stat_dict(t.rating),
+                      "execution_time_s": _stat_dict(t.execution_time_s)}
+                     for t in summary.per_task],
+    }
+
+
+def _mean_se(s: Stat, digits: int, scale: float = 1.0) -> str:
+    """``"mean ± se"`` (``scale`` times each) to ``digits`` decimals; just the mean when
+    there is no SE; ``"-"`` when there is no value."""
+    if math.isnan(s.mean):
+        return _NONE
+    text = f"{s.mean * scale:.{digits}f}"
+    return text if math.isnan(s.se) else f"{text} ± {s.se * scale:.{digits}f}"
+
+
+def _rate(s: Stat) -> str:
+    """A success rate as ``"90% (18/20)"``."""
+    if s.n == 0:
+        return _NONE
+    return f"{s.mean * 100:.0f}% ({round(s.mean * s.n)}/{s.n})"
+
+
+_METHOD_HEADERS = ("method", "trials", "rating (1-5), mean ± SE",
+                   "execution time (s), mean ± SE", "success rate",
+                   "planning time (ms), mean ± SE")
+
+
+def _method_cells(m: MethodSummary) -> tuple[str, ...]:
+    return (m.method, str(m.trials), _mean_se(m.rating, 2), _mean_se(m.execution_time_s, 1),
+            _rate(m.success_rate), _mean_se(m.planning_time_s, 1, scale=1000.0))
+
+
+def _task_cells(summary: Summary, task: int) -> tuple[str, ...]:
+    cells = [str(task)]
+    for name in summary.method_names:
+        c = summary.cell(name, task)
+        cells.append(_NONE if c is None or math.isnan(c.rating.mean)
+                     else f"{c.rating.mean:.2f}")
+    return tuple(cells)
+
+
+def _md_row(cells: Iterable[str]) -> str:
+    return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
+
+
+def summary_markdown(summary: Summary) -> str:
+    """Two Markdown tables: per method (rating, execution time in s, success rate,
+    planning time in ms, each mean ± standard error) and mean rating per task (rows:
+    tasks; columns: methods). Ends with a newline."""
+    lines = [_md_row(_METHOD_HEADERS),
+             "| --- | ---: | ---: | ---: | ---: | ---: |"]
+    lines += [_md_row(_method_cells(m)) for m in summary.methods]
+    names = summary.method_names
+    lines += ["", "Mean rating (1-5) per task:", "",
+              _md_row(("task", *names)),
+              "| ---: |" + " ---: |" * len(names)]
+    lines += [_md_row(_task_cells(summary, task)) for task in summary.tasks]
+    return "\n".join(lines) + "\n"
+
+
+def print_summary(summary: Summary, console: Console) -> None:
+    """Print the tables of :func:`summary_markdown` to ``console`` as rich tables."""
+    table = RichTable(title="Results per method (mean ± standard error)", title_justify="left")
+    for k, header in enumerate(_METHOD_HEADERS):
+        table.add_column(header, justify="left" if k == 0 else "right")
+    for m in summary.methods:
+        table.add_row(*(escape(c) for c in _method_cells(m)))
+    console.print(table)
+    per_task = RichTable(title="Mean rating (1-5) per task", title_justify="left")
+    per_task.add_column("task", justify="right")
+    for name in summary.method_names:
+        per_task.add_column(escape(name), justify="right")
+    for task in summary.tasks:
+        per_task.add_row(*(escape(c) for c in _task_cells(summary, task)))
+    console.print(per_task)

@@ -1,0 +1,83 @@
+"""Relations the user states as preferences: they win over the LLM, clingo-checked."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from llm_grop import BackendOptions, arrange
+from llm_grop.arrangement.pipeline import ArrangeOptions
+from llm_grop.arrangement.sampling import violations
+from llm_grop.cli import main
+from llm_grop.errors import BadInput
+from scripted import TASK1_GOOD, scripted
+
+REQUEST = "a dinner plate, a dinner fork and a dinner knife"
+#: An LLM with the fork and knife on the wrong sides.
+SWAPPED = TASK1_GOOD.replace("left", "LEFT").replace("right", "left").replace("LEFT", "right")
+
+
+def _arrange(server, options: ArrangeOptions, request: str = REQUEST):
+    opts = BackendOptions(base_url=server.url, api_key="test", max_retries=0)
+    return arrange(request, llm="openai", llm_options=opts, seed=2, options=options)
+
+
+def _rels(result) -> set[tuple]:
+    return {(r.subject, r.relation, r.reference) for r in result.arrangement.relations}
+
+
+def test_a_preference_overrides_the_llm_on_its_pair(chat_server) -> None:
+    chat_server.reply = scripted([SWAPPED])
+    result = _arrange(chat_server, ArrangeOptions(
+        preferences=("the dinner fork to the left of the dinner plate",)))
+    rels = _rels(result)
+    assert ("dinner fork", "to the left of", "dinner plate") in rels
+    assert ("dinner fork", "to the right of", "dinner plate") not in rels
+    assert ("dinner knife", "to the left of", "dinner plate") in rels  # the LLM's, kept
+    assert any("overridden by a preference" in w for w in result.arrangement.warnings)
+    for config in result.configurations:
+        assert not violations(config, result.arrangement.relations, result.arrangement.table)
+
+
+def test_preferences_for_every_object_skip_template_1(chat_server) -> None:
+    chat_server.reply = scripted([SWAPPED])
+    pool = ("the dinner fork to the left of the dinner plate",
+            "the dinner knife to the right of the dinner plate",
+            "the mug lid on top of the mug")  # not requested: does not apply
+    result = _arrange(chat_server, ArrangeOptions(preference_pool=pool))
+    assert _rels(result) == {("dinner fork", "to the left of", "dinner plate"),
+                             ("dinner knife", "to the right of", "dinner plate")}
+    prompts = [c.prompt for c in result.arrangement.llm.calls]
+    assert prompts and all("centimeters" in p for p in prompts)  # Template 2 only
+    pos = {p.name: p.x for p in result.arrangement.placements}
+    assert pos["dinner fork"] < pos["dinner plate"] < pos["dinner knife"]
+
+
+def test_contradicting_preferences_are_bad_input(chat_server) -> None:
+    chat_server.reply = scripted([TASK1_GOOD])
+    with pytest.raises(BadInput, match="preferences contradict each other"):
+        _arrange(chat_server, ArrangeOptions(preferences=(
+            "the dinner fork to the left of the dinner plate",
+            "the dinner plate to the left of the dinner fork")))
+
+
+def test_unreadable_preference_is_bad_input(chat_server) -> None:
+    chat_server.reply = scripted([TASK1_GOOD])
+    with pytest.raises(BadInput, match="--prefer: cannot read 'the mug near the plate'"):
+        _arrange(chat_server, ArrangeOptions(preferences=("the mug near the plate",)))
+
+
+def test_cli_preferences_file(chat_server, tmp_path: Path, capsys) -> None:
+    chat_server.reply = scripted([SWAPPED])
+    prefs = tmp_path / "prefs.yaml"
+    prefs.write_text("preferences:\n  - the dinner fork to the left of the dinner plate\n"
+                     "  - the dinner knife to the right of the dinner plate\n")
+    args = ["arrange", REQUEST, "--llm", "openai", "--base-url", chat_server.url,
+            "--preferences", str(prefs)]
+    assert main(args) == 0
+    assert "to the left of" in capsys.readouterr().out
+    prefs.write_text("preferences: the fork\n")
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "prefs.yaml: preferences: expected a list of sentences" in err

@@ -1,0 +1,125 @@
+"""`llm-grop bench` end to end: rows, resume, determinism, refusals and bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from llm_grop.cli import main
+from llm_grop.evaluation.trial import TIMING_FIELDS
+
+RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"
+BASE = ["bench", "--tasks", "1", "--trials", "2", "--llm", "replay", "--replay", str(RECORDING),
+        "-q"]
+
+
+def _rows(out: Path) -> list[dict]:
+    return [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
+
+
+def _stable(rows: list[dict]) -> list[dict]:
+    for row in rows:
+        for key in TIMING_FIELDS:
+            row.pop(key, None)
+    return rows
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err
+    return err
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("bench") / "run"
+    assert main(BASE + ["--out", str(out), "--workers", "2"]) == 0
+    return out
+
+
+def test_two_trial_bench_runs_end_to_end(finished: Path) -> None:
+    rows = _rows(finished)
+    keys = [(r["task"], r["trial"], r["method"]) for r in rows]
+    assert keys == sorted(keys) and len(keys) == 8
+    assert {r["method"] for r in rows} == {"tpra", "latp", "grop", "llm-grop"}
+    for r in rows:
+        assert {"method", "task", "seed", "success", "execution_time_s", "planning_time_s",
+                "final", "rating", "rating_explanation", "llm_calls", "retries"} <= r.keys()
+        assert 1 <= r["rating"] <= 5
+        assert r["seed"] == r["trial"]
+        assert (finished / r["image"]).stat().st_size > 0
+        if r["method"] in {"latp", "llm-grop"}:
+            assert r["llm_calls"] > 0
+        else:
+            assert r["llm_calls"] == 0
+    # Paired: every method of a trial saw the same chairs.
+    chairs = {(r["trial"], json.dumps(r["scene"]["chairs"])) for r in rows if "scene" in r}
+    assert len({t for t, _ in chairs}) == len(chairs)
+    for name in ("summary.json", "summary.md", "fig3_rating_vs_time.png",
+                 "fig5_rating_per_task.png", "experiment.json"):
+        assert (finished / name).stat().st_size > 0
+
+
+def test_resume_changes_nothing(finished: Path) -> None:
+    before = (finished / "trials.jsonl").read_bytes()
+    summary = (finished / "summary.json").read_bytes()
+    assert main(BASE + ["--out", str(finished)]) == 0
+    assert (finished / "trials.jsonl").read_bytes() == before
+    assert (finished / "summary.json").read_bytes() == summary
+
+
+def test_interrupted_run_resumes_to_the_same_rows(finished: Path, tmp_path: Path) -> None:
+    out = tmp_path / "partial"
+    assert main(BASE + ["--out", str(out), "--methods", "grop"]) == 0
+    lines = (out / "trials.jsonl").read_text().splitlines()
+    # As if killed while writing the second row: the cut-off row is redone.
+    (out / "trials.jsonl").write_text(lines[0] + "\n" + lines[1][:40])
+    assert main(BASE + ["--out", str(out), "--methods", "grop"]) == 0
+    assert _stable(_rows(out)) == _stable([r for r in _rows(finished) if r["method"] == "grop"])
+
+
+def test_same_seed_same_jsonl(finished: Path, tmp_path: Path) -> None:
+    out = tmp_path / "again"
+    assert main(BASE + ["--out", str(out), "--workers", "1"]) == 0
+    assert _stable(_rows(out)) == _stable(_rows(finished))
+
+
+def test_other_experiment_is_refused(finished: Path, capsys) -> None:
+    before = (finished / "trials.jsonl").read_bytes()
+    assert main(BASE + ["--out", str(finished), "--chairs", "3"]) == 2
+    assert "holds another experiment's results (different chairs)" in _one_line_error(capsys)
+    assert (finished / "trials.jsonl").read_bytes() == before
+
+
+def test_non_empty_directory_is_refused(tmp_path: Path, capsys) -> None:
+    (tmp_path / "notes.txt").write_text("mine")
+    assert main(BASE + ["--out", str(tmp_path)]) == 2
+    assert "not empty" in _one_line_error(capsys)
+
+
+@pytest.mark.parametrize(("extra", "needle"), [
+    (["--methods", "tpra,magic"], "unknown method 'magic'"),
+    (["--tasks", "9"], "unknown task 9"),
+    (["--tasks", "dinner"], "no task is tagged 'dinner'"),
+])
+def test_bad_flags(tmp_path: Path, capsys, extra: list[str], needle: str) -> None:
+    assert main(BASE + ["--out", str(tmp_path / "x")] + extra) == 2
+    assert needle in _one_line_error(capsys)
+    assert not (tmp_path / "x").exists()
+
+
+def test_user_task_file(tmp_path: Path, capsys) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("tasks:\n  - id: 9\n    objects: []\n")
+    assert main(BASE + ["--out", str(tmp_path / "x"), "--task-file", str(bad),
+                        "--tasks", "9"]) == 2
+    assert "bad.yaml" in _one_line_error(capsys)
+    good = tmp_path / "good.yaml"
+    good.write_text("tasks:\n  - id: 9\n    objects: [dinner plate, mug]\n    tags: [mine]\n")
+    out = tmp_path / "mine"
+    assert main(["bench", "--tasks", "mine", "--trials", "1", "--methods", "tpra,grop",
+                 "--task-file", str(good), "--out", str(out), "--no-images", "-q"]) == 0
+    rows = _rows(out)
+    assert [r["task"] for r in rows] == [9, 9] and "image" not in rows[0]
