@@ -81,3 +81,14 @@ def test_cli_preferences_file(chat_server, tmp_path: Path, capsys) -> None:
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "prefs.yaml: preferences: expected a list of sentences" in err
+
+
+def test_a_stated_distance_replaces_template_2(chat_server) -> None:
+    chat_server.reply = scripted([SWAPPED], distance="About 9 centimeters.")
+    result = _arrange(chat_server, ArrangeOptions(preference_pool=(
+        "the dinner fork 2 cm to the left of the dinner plate",
+        "the dinner knife to the right of the dinner plate")))
+    gaps = result.gaps_m
+    assert gaps[("dinner fork", "to the left of", "dinner plate")] == pytest.approx(0.02)
+    assert gaps[("dinner knife", "to the right of", "dinner plate")] == pytest.approx(0.09)
+    assert len(result.arrangement.llm.calls) == 1

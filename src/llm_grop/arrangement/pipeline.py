@@ -199,8 +199,12 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
                      for r in overridden]
 
     gaps: dict[tuple[str, str, str | None], float] = {}
+    stated = preferences.stated_gaps(prefs)
     for k, rel in enumerate(accepted):
         if rel.relation == CENTER or rel.relation in STACKING:
+            continue
+        if rel.key() in stated:
+            gaps[rel.key()] = stated[rel.key()]
             continue
         say(f"asking {llm.model} for the distance: {rel.sentence()}")
         record = llm.complete(distances.template2_prompt(rel),

@@ -5,8 +5,9 @@ Preferences are sentences in the paper's own phrasing ("the dinner fork to the l
 the dinner plate", "mug lid on top of mug"), read by the same reader as the LLM's answers.
 They win over the LLM: an LLM relation about a pair the user spoke of is dropped, and so
 is one that clingo finds inconsistent with the preferences. When the preferences mention
-every requested object, Template 1 is not asked at all; Template 2 still asks the LLM
-for the distances.
+every requested object, Template 1 is not asked at all. A preference that states a
+distance ("the dinner fork 2 cm to the left of the dinner plate") sets that gap, and
+Template 2 is asked only for the others.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from pathlib import Path
 import yaml
 
 from llm_grop.arrangement import consistency
+from llm_grop.arrangement.distances import parse_distance_m
 from llm_grop.arrangement.relations import parse_relations
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item
@@ -75,6 +77,16 @@ def merge(preferences: Sequence[Relation], llm: Sequence[Relation]
         else:
             kept.append(r)
     return tuple(kept), tuple(overridden)
+
+
+def stated_gaps(preferences: Sequence[Relation]) -> dict[tuple[str, str, str | None], float]:
+    """The gaps, metres, that preferences state in their sentences, by relation key."""
+    out = {}
+    for r in preferences:
+        gap_m, defaulted = parse_distance_m(r.line or "")
+        if not defaulted:
+            out[r.key()] = gap_m
+    return out
 
 
 def load_preference_file(path: str | Path) -> tuple[str, ...]:

@@ -6,8 +6,8 @@ The four methods of the paper differ in exactly two choices and share everything
 ========== ============================ ===========================================
 method     arrangement                  standing positions
 ========== ============================ ===========================================
-tpra       random, collision-free       uniform among those within reach
-latp       the LLM's (§III-A, §III-B)   uniform among those within reach
+tpra       random, collision-free       uniform among those within good reach
+latp       the LLM's (§III-A, §III-B)   uniform among those within good reach
 grop       random, collision-free       utility-optimal over M configurations
 llm-grop   the LLM's                    utility-optimal over M configurations
 ========== ============================ ===========================================

@@ -27,6 +27,9 @@ from llm_grop.world.plan import Plan, Step
 
 StandingPolicy = Literal["utility", "uniform"]
 
+#: The uniform policy draws among positions whose place succeeds at least this fraction
+#: as often as from the best position.
+UNIFORM_REACH = 0.5
 #: Up to this many objects the order is found exactly for every configuration.
 EXACT_LIMIT = 12
 #: Beyond it, every configuration gets the local-search order, and the ``REFINE`` best
@@ -62,8 +65,9 @@ def evaluate(ctx: PlanningContext, config: Configuration, index: int,
              node_budget: int = NODE_BUDGET) -> Candidate | str:
     """The best plan for ``config``, or the reason none exists.
 
-    ``policy="uniform"`` draws each standing position uniformly from those within reach
-    (with ``rng``) instead of maximising utility; the order is still the cheapest.
+    ``policy="uniform"`` draws each standing position uniformly (with ``rng``) from those
+    within good reach (:data:`UNIFORM_REACH`) instead of maximising utility; the order is
+    still the cheapest.
     ``node_budget`` bounds the order search beyond :data:`EXACT_LIMIT` objects.
     """
     placements = _in_item_order(ctx, config)
@@ -77,7 +81,14 @@ def evaluate(ctx: PlanningContext, config: Configuration, index: int,
     if policy == "uniform":
         if rng is None:
             raise ValueError("the uniform standing policy needs a random generator")
-        fixed = [int(rng.choice(np.flatnonzero(feas[j] > 0))) for j in range(len(placements))]
+        manip = ctx.place_manipulation(placements)
+        fixed = []
+        for j in range(len(placements)):
+            # Like the authors' baselines, which stand at a random side from which the arm
+            # reaches: a position counts when its place is at least half as likely to
+            # succeed as from the best one. Chairs and path costs are not considered.
+            ok = np.flatnonzero((feas[j] > 0) & (manip[j] >= UNIFORM_REACH * manip[j].max()))
+            fixed.append(int(rng.choice(ok)))
         score = np.full_like(feas, -np.inf)
         for j, s in enumerate(fixed):
             score[j, s] = w * feas[j, s] - dist_in[j, s] / v

@@ -153,13 +153,15 @@ class PlanningContext:
         pts = [self.scene.table_to_room(p.x, p.y) for p in placements]
         return np.array([[q.x, q.y] for q in pts])
 
+    def place_manipulation(self, placements: Sequence[Placement]) -> Floats:
+        """``(n, P)`` probability that placing object ``j`` from stand ``s`` succeeds."""
+        r = reach(self.candidates, self.targets_room(placements))
+        return np.asarray(self.model.manipulation(r.T, self.scene.robot), dtype=float)
+
     def place_feasibility(self, placements: Sequence[Placement]) -> Floats:
         """``(n, P)`` probability that object ``j``'s fetch-and-place succeeds from stand ``s``."""
-        robot = self.scene.robot
-        r = reach(self.candidates, self.targets_room(placements))
-        manip = np.asarray(self.model.manipulation(r.T, robot), dtype=float)
         pick = np.array([p.success_p for p in self.pickups])
-        return pick[:, None] * self.cand_nav_p[None, :] * manip
+        return pick[:, None] * self.cand_nav_p[None, :] * self.place_manipulation(placements)
 
     def fixed_costs_s(self) -> float:
         """Seconds of manipulation every plan spends: one pick and one place per object."""
