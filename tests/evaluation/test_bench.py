@@ -123,3 +123,32 @@ def test_user_task_file(tmp_path: Path, capsys) -> None:
                  "--task-file", str(good), "--out", str(out), "--no-images", "-q"]) == 0
     rows = _rows(out)
     assert [r["task"] for r in rows] == [9, 9] and "image" not in rows[0]
+
+
+def test_ctrl_c_loses_no_finished_trial(finished: Path, tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "interrupted"
+    cmd = [sys.executable, "-c", "import sys; from llm_grop.cli import main; "
+           "sys.exit(main(sys.argv[1:]))", *BASE, "--out", str(out), "--workers", "2"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    rows = out / "trials.jsonl"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if rows.exists() and rows.read_text().count("\n") >= 1:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    if proc.returncode == 130:
+        assert b"rerun the same command to resume" in err
+        assert b"Traceback" not in err
+    else:  # the bench finished before the signal arrived
+        assert proc.returncode == 0
+    saved = _rows(out)
+    assert saved
+    assert main(BASE + ["--out", str(out)]) == 0
+    assert _stable(_rows(out)) == _stable(_rows(finished))

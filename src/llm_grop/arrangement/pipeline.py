@@ -164,6 +164,7 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
     """
     options = options or ArrangeOptions()
     say = on_event or (lambda _msg: None)
+    first_call = len(llm.calls)
     warnings: list[str] = []
     attempts: list[Attempt] = []
     accepted: tuple[Relation, ...] = ()
@@ -221,6 +222,7 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
                                              np.random.default_rng(seed), m=options.m)
     arrangement = Arrangement(
         request=request, table=table, placements=configs[0].placements, relations=accepted,
-        llm=LLMSummary(llm.backend, llm.model, tuple(llm.calls)), warnings=tuple(warnings),
+        llm=LLMSummary(llm.backend, llm.model, tuple(llm.calls[first_call:])),
+        warnings=tuple(warnings),
         conflicts=tuple(a.conflict for a in attempts if a.conflict))
     return ArrangementResult(arrangement, configs, layout, tuple(attempts), tuple(dropped), gaps)

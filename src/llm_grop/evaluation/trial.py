@@ -15,7 +15,7 @@ from typing import Any
 
 from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.errors import Infeasible
-from llm_grop.llm.base import BackendOptions, CallLog
+from llm_grop.llm.base import LLM, BackendOptions, CallLog, create_llm
 from llm_grop.world.arrangement import Arrangement
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import items_from_names
@@ -72,16 +72,14 @@ class TrialRunner:
         self.catalog = Catalog.load(settings.catalog_files)
         self.tasks: dict[int, Task] = load_tasks(settings.task_files)
         self.scene: Scene = load_scene(settings.scene)
-        self._llm: CallLog | None = None
+        self._backend: LLM | None = None
 
-    @property
     def llm(self) -> CallLog:
-        """The LLM, created on first use (methods without one never load a model)."""
-        if self._llm is None:
-            from llm_grop.api import make_llm
-
-            self._llm = make_llm(self.settings.backend, self.settings.llm_options)
-        return self._llm
+        """A fresh call log for one trial over the shared backend, which is created on first
+        use (methods without an LLM never load a model)."""
+        if self._backend is None:
+            self._backend = create_llm(self.settings.backend, self.settings.llm_options)
+        return CallLog(self._backend)
 
     def __call__(self, spec: TrialSpec) -> dict[str, Any]:
         """The trial's JSONL row."""
@@ -92,9 +90,7 @@ class TrialRunner:
 
         task = self.tasks[spec.task]
         uses_llm = get_method(spec.method).uses_llm
-        log = self.llm if uses_llm else None
-        before = len(log.calls) if log else 0
-        wall = log.wall_s if log else 0.0
+        log = self.llm() if uses_llm else None
         try:
             result = run(task=spec.task, tasks=self.tasks, method=spec.method, scene=self.scene,
                          chairs=self.settings.chairs, seed=spec.seed,
@@ -111,11 +107,11 @@ class TrialRunner:
                 llm.pop("log", None)
             row["status"] = "ok"
             row["retries"] = sum(s.attempt > 1 for s in result.execution.steps)
-        calls = log.calls[before:] if log else []
+        calls = log.calls if log else []
         row.update(trial=spec.trial, llm_calls=len(calls),
                    llm_prompt_tokens=sum(c.prompt_tokens or 0 for c in calls),
                    llm_completion_tokens=sum(c.completion_tokens or 0 for c in calls),
-                   llm_time_s=round(log.wall_s - wall, 4) if log else 0.0)
+                   llm_time_s=round(log.wall_s, 4) if log else 0.0)
         self._rate(row, task)
         if self.settings.images is not None:
             row["image"] = self._draw(spec, task, final)
