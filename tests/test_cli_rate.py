@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from cli_support import one_line_error as _one_line_error
 from llm_grop.cli import main
 
 LABELLED = Path(__file__).parent / "evaluation" / "labelled"
@@ -16,14 +17,6 @@ GOOD = LABELLED / "08_task8_perfect.json"
 @pytest.fixture(autouse=True)
 def _no_user_catalog(monkeypatch) -> None:
     monkeypatch.delenv("LLM_GROP_CATALOG", raising=False)
-
-
-def _one_line_error(capsys) -> str:
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1, err
-    return lines[0]
 
 
 def test_rate_good_file_prints_score_and_checks(capsys) -> None:

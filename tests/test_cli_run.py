@@ -7,22 +7,11 @@ from pathlib import Path
 
 import pytest
 
+from cli_support import REQUEST
+from cli_support import one_line_error as _one_line_error
+from cli_support import openai_flags as _openai
 from llm_grop.cli import main
 from scripted import TASK1_GOOD, scripted
-
-REQUEST = "set the table with a dinner plate, a dinner fork and a dinner knife"
-
-
-def _openai(server) -> list[str]:
-    return ["--llm", "openai", "--base-url", server.url, "--retries", "0"]
-
-
-def _one_line_error(capsys) -> str:
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1, err
-    return lines[0]
 
 
 def test_run_writes_run_json_and_picture(chat_server, tmp_path: Path, capsys,
