@@ -100,9 +100,14 @@ def test_non_empty_directory_is_refused(tmp_path: Path, capsys) -> None:
 
 
 @pytest.mark.parametrize(("extra", "needle"), [
-    (["--methods", "tpra,magic"], "unknown method 'magic'"),
+    (["--methods", "tpra,magic"], "--methods: unknown method 'magic'"),
     (["--tasks", "9"], "unknown task 9"),
     (["--tasks", "dinner"], "no task is tagged 'dinner'"),
+    (["--tasks", "3-1"], "'3-1' is an empty range"),
+    (["--seed", "-1"], "--seed"),
+    (["--prefer", "the dinner fork to the left of the dinner plate",
+      "--prefer", "the dinner plate to the left of the dinner fork"],
+     "task 1: preferences contradict each other"),
 ])
 def test_bad_flags(tmp_path: Path, capsys, extra: list[str], needle: str) -> None:
     assert main(BASE + ["--out", str(tmp_path / "x")] + extra) == 2

@@ -140,3 +140,46 @@ def test_unreachable_object_is_reported(catalog: Catalog) -> None:
     ctx = _ctx(catalog, ["dinner plate"], scene=big)
     with pytest.raises(Infeasible, match="no standing position can reach 'dinner plate'"):
         choose(ctx, [config(placement("dinner plate", 0.0, 0.0))])
+
+
+@pytest.mark.parametrize("capacity", [2, 3])
+def test_more_capacity_never_plans_a_slower_run(catalog: Catalog, capacity: int) -> None:
+    from dataclasses import replace
+
+    from llm_grop.world.robot import Robot
+
+    names = ["dinner plate", "dinner fork", "dinner knife", "mug"]
+    cfg = config(placement("dinner plate", 0.0, 0.0),
+                 placement("dinner fork", -0.2, 0.0, "box", (0.025, 0.2)),
+                 placement("dinner knife", 0.2, 0.0, "box", (0.02, 0.23)),
+                 placement("mug", 0.3, 0.15, size=(0.09, 0.09)))
+    durations = []
+    for cap in (1, capacity):
+        scene = replace(two_table_room(), robot=Robot(capacity=cap))
+        ctx = _ctx(catalog, names, scene=scene)
+        cand = choose(ctx, [cfg])
+        plan = build_plan(ctx, cand, Navigator(scene, 0.3), seed=0, configurations=1)
+        durations.append(sum(s.duration_s for s in plan.steps))
+        carried = 0
+        for s in plan.steps:
+            carried += {"pick": 1, "place": -1}.get(s.action, 0)
+            assert 0 <= carried <= cap
+    assert durations[1] <= durations[0] + 1e-9
+
+
+def test_pickup_stances_the_robot_cannot_reach_are_not_used() -> None:
+    from dataclasses import replace
+
+    from llm_grop.api import run
+    from llm_grop.world.scene_file import load_scene
+
+    # Turned this way, the side table leaves a pocket between it and the corner walls
+    # where the arm would reach best but the base cannot drive.
+    scene = load_scene(None)
+    tables = tuple(replace(t, box=replace(t.box, x=7.0, y=1.0, yaw=0.7))
+                   if t.name == "side table" else t for t in scene.tables)
+    result = run(task=1, method="grop", scene=replace(scene, tables=tables), seed=0)
+    assert result.plan.order
+    for step in result.plan.steps:
+        if step.action == "pick":
+            assert step.standing is not None

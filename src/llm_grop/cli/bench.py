@@ -24,6 +24,8 @@ def parse_tasks(text: str, known: dict[int, Any]) -> tuple[int, ...]:
                 span = range(int(lo), int(hi or lo) + 1)
             except ValueError:
                 raise BadInput(f"--tasks: {part!r} is not a task number or range") from None
+            if not span:
+                raise BadInput(f"--tasks: {part!r} is an empty range")
             ids += span
         else:
             tagged = [t for t, task in known.items() if part in task.tags]
@@ -44,10 +46,31 @@ def parse_methods(text: str) -> tuple[str, ...]:
     """``"tpra,grop"`` -> registered method names (unknown ones are bad input)."""
     from llm_grop.methods.registry import get_method
 
-    names = tuple(dict.fromkeys(get_method(m).name for m in text.split(",") if m.strip()))
+    try:
+        names = tuple(dict.fromkeys(get_method(m).name for m in text.split(",") if m.strip()))
+    except BadInput as exc:
+        raise BadInput(str(exc).replace("--method:", "--methods:", 1)) from None
     if not names:
         raise BadInput("--methods: no method given")
     return names
+
+
+def _check_preferences(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
+                       catalog_files: tuple[Path, ...]) -> None:
+    """Bad preferences are reported before any trial runs (and writes its directory)."""
+    from llm_grop.arrangement.preferences import read_preferences
+    from llm_grop.world.catalog import Catalog
+    from llm_grop.world.request import items_from_names
+
+    if not (options.preferences or options.preference_pool):
+        return
+    catalog = Catalog.load(catalog_files)
+    for t in tasks:
+        items = items_from_names(known[t].objects, catalog)
+        try:
+            read_preferences(options.preferences, options.preference_pool, items, catalog)
+        except BadInput as exc:
+            raise BadInput(f"task {t}: {exc}") from None
 
 
 @click.command(epilog=EPILOG)
@@ -62,11 +85,13 @@ def parse_methods(text: str) -> tuple[str, ...]:
               help="Results directory; rerunning into it resumes.")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(1),
               help="Worker processes.")
-@click.option("--seed", default=0, show_default=True, help="Seed of trial 0 (trial k: seed+k).")
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
+              help="Seed of trial 0 (trial k: seed+k).")
 @click.option("--scene", "scene_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Dining-room scene YAML (default: the packaged dining room).")
-@click.option("--chairs", default=1, show_default=True, type=click.IntRange(0),
-              help="Chairs sampled near the table in every trial.")
+@click.option("--chairs", type=click.IntRange(0),
+              help="Chairs sampled near the table in every trial [default: the scene's own, "
+                   "else 1].")
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
 @click.option("--task-file", "task_files", multiple=True,
@@ -76,7 +101,7 @@ def parse_methods(text: str) -> tuple[str, ...]:
 @llm_flags
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
-          seed: int, scene_path: Path | None, chairs: int, w: float,
+          seed: int, scene_path: Path | None, chairs: int | None, w: float,
           task_files: tuple[Path, ...], no_images: bool, record_path: Path | None,
           catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
     """Run the paper's experiment: tasks x trials x methods, rated 1-5 (paper §IV)."""
@@ -104,6 +129,7 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     llm_options, options = llm_settings(**flags)
     if scene_path is not None:
         load_scene(scene_path)  # a bad scene is reported before any trial runs
+    _check_preferences(tasks, known, options, catalog_files)
     settings = TrialSettings(
         backend=flags["backend"], llm_options=llm_options, arrange=options,
         scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,

@@ -18,7 +18,7 @@ from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
               help="Dining-room scene YAML (default: the packaged dining room).")
 @click.option("--method", default="llm-grop", show_default=True,
               help="tpra, latp, grop or llm-grop.")
-@click.option("--seed", default=0, show_default=True,
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
               help="Seed for the scene's chairs, the LLM, the sampler, the plan and execution.")
 @click.option("--chairs", type=click.IntRange(0),
               help="Chairs to sample near the table [default: the scene's own, else 1].")

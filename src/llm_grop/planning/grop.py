@@ -20,6 +20,7 @@ from llm_grop.errors import Infeasible
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.sequencing import best_order, supports_before
 from llm_grop.planning.timing import leg_duration_s
+from llm_grop.planning.trips import plan_trips
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.geometry2d import Pose2D
@@ -166,9 +167,36 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
                configurations: int) -> Plan:
     """The chosen candidate as steps, with an OMPL path for every navigation leg.
 
-    With ``capacity > 1`` consecutive objects of the order share a trip: all pickups,
-    then all placements (the order and standing positions are those of capacity 1).
+    With ``capacity > 1`` the order is cut into trips (:mod:`llm_grop.planning.trips`):
+    all of a trip's pickups, then its placements; the order and standing positions are
+    those of capacity 1. Both the trips and one object per trip get paths, and the plan
+    of shorter expected duration is kept, so more capacity is never slower in the plan.
     """
+    robot = ctx.scene.robot
+    trips, _ = plan_trips(ctx, cand.order, cand.stand, robot.capacity)
+    steps = _steps(ctx, cand, trips, navigator, seed)
+    # The candidate's cost assumed one object per trip; credit what the trips save.
+    saved_s = 0.0
+    if len(trips) < len(cand.order):
+        singles = _steps(ctx, cand, tuple((j,) for j in cand.order), navigator, seed)
+        saved_s = _duration(singles) - _duration(steps)
+        if saved_s <= 0:
+            steps, saved_s = singles, 0.0
+    names = tuple(cand.placements[j].name for j in cand.order)
+    return Plan(order=names, steps=steps, configuration=cand.placements,
+                configuration_index=cand.index, utility=cand.utility + saved_s,
+                feasibility=cand.feasibility, cost_s=cand.cost_s - saved_s,
+                configurations_considered=configurations)
+
+
+def _duration(steps: Sequence[Step]) -> float:
+    """Expected seconds of ``steps`` when nothing fails."""
+    return sum(s.duration_s for s in steps)
+
+
+def _steps(ctx: PlanningContext, cand: Candidate, trips: Sequence[tuple[int, ...]],
+           navigator: Navigator, seed: int) -> tuple[Step, ...]:
+    """The steps of ``cand`` carried out as ``trips``, with OMPL paths."""
     scene, robot = ctx.scene, ctx.scene.robot
     steps: list[Step] = []
     here = scene.robot_start
@@ -188,10 +216,7 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
         raise Infeasible(f"no collision-free path to {'pick up' if p else 'place'} {obj!r} "
                          f"from ({here.x:.2f}, {here.y:.2f})")
 
-    order = cand.order
-    cap = robot.capacity
-    for t in range(0, len(order), cap):
-        trip = order[t:t + cap]
+    for trip in trips:
         for j in trip:
             pu = ctx.pickups[j]
             p_nav = float(ctx.model.navigation(np.array([pu.standing.clearance_m]))[0])
@@ -209,11 +234,7 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
             steps.append(Step("place", p.name, standing=stood, pose=(p.x, p.y, p.yaw),
                               duration_s=robot.place_time_s,
                               success_p=_manip(ctx, stood, (target[0], target[1]))))
-    names = tuple(cand.placements[j].name for j in order)
-    return Plan(order=names, steps=tuple(steps), configuration=cand.placements,
-                configuration_index=cand.index, utility=cand.utility,
-                feasibility=cand.feasibility, cost_s=cand.cost_s,
-                configurations_considered=configurations)
+    return tuple(steps)
 
 
 def _manip(ctx: PlanningContext, stand: Pose2D, xy: tuple[float, float]) -> float:

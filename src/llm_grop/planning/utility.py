@@ -112,6 +112,9 @@ class PlanningContext:
         self.cand_nav_p = np.asarray(
             model.navigation(np.array([c.clearance_m for c in self.candidates])), dtype=float)
         grid = build_grid(scene, resolution_m=self.options.grid_resolution_m)
+        self.graph = NavGraph(grid, robot.base_radius_m)
+        start = np.array([[scene.robot_start.x, scene.robot_start.y]])
+        from_start = self.graph.fields([(scene.robot_start.x, scene.robot_start.y)])[0]
         keys: dict[tuple[float, float], int] = {}
         pickups = []
         around: dict[str, tuple[StandingPose, ...]] = {}
@@ -120,9 +123,16 @@ class PlanningContext:
             if source is None:
                 raise BadInput(f"scene: no start location for {item.name!r}")
             if source.table not in around:
-                around[source.table] = candidate_standing_poses(
+                near = candidate_standing_poses(
                     scene, source.table, robot, spacing_m=self.options.spacing_m,
                     standoffs_m=self.options.standoffs_m)
+                xy = np.array([[c.pose.x, c.pose.y] for c in near]).reshape(-1, 2)
+                # A stance in a pocket the robot cannot drive into is no stance at all.
+                ok = np.isfinite(from_start.cost_at(xy)) if len(near) else np.array([], bool)
+                around[source.table] = tuple(c for c, k in zip(near, ok, strict=True) if k)
+                if near and not around[source.table]:
+                    raise Infeasible(f"no standing position next to table {source.table!r} "
+                                     "can be reached from the robot's start")
             stand = pickup_pose(scene, source, robot, model, around[source.table])
             p = float(model.navigation(np.array([stand.clearance_m]))[0]
                       * model.manipulation(np.array([_dist(stand, source)]), robot)[0])
@@ -130,9 +140,8 @@ class PlanningContext:
             pickups.append(Pickup(item.name, source, stand, p, keys.setdefault(key, len(keys))))
         self.pickups = tuple(pickups)
         sources = list(keys)
-        fields = NavGraph(grid, robot.base_radius_m).fields(sources)
+        fields = self.graph.fields(sources)
         self.dist_m = np.stack([f.cost_at(self.cand_xy) for f in fields], axis=1)
-        start = np.array([[scene.robot_start.x, scene.robot_start.y]])
         self.start_dist_m = np.array([f.cost_at(start)[0] for f in fields])
         self.pickup_dist_m = np.stack([f.cost_at(np.array(sources)) for f in fields], axis=1)
         for p in self.pickups:

@@ -73,7 +73,7 @@ def _sample_chairs(scene: Scene, n: int, size: tuple[float, float],
     lo, hi = scene.chair_band_m
     plural = "chair" if n == 1 else "chairs"
     raise Infeasible(f"cannot place {n} {plural} near {scene.target!r}: at most {len(best)} "
-                     f"fit {lo:g}-{hi:g} m from its long sides")
+                     f"fit {lo:g}-{hi:g} m from its ±y sides")
 
 
 def _chair_round(scene: Scene, n: int, size: tuple[float, float],

@@ -63,7 +63,7 @@ class Scene:
         robot_start: the robot's start pose.
         robot: the robot's parameters.
         chair_band_m: chairs are sampled between these distances (metres) from the target
-            table's long sides.
+            table's ±y sides (the diner's side and the far side, in the table's frame).
     """
 
     name: str

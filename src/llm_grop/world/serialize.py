@@ -73,8 +73,12 @@ def write_json(path: str | Path, data: Mapping[str, Any]) -> None:
     """Write ``data`` atomically, so a failure never leaves half a file."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(dumps(data), encoding="utf-8")
-    tmp.replace(path)
+    try:
+        tmp.write_text(dumps(data), encoding="utf-8")
+        tmp.replace(path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise BadInput(f"{path}: cannot write ({exc.strerror})") from None
 
 
 def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -> Arrangement:
