@@ -60,6 +60,11 @@ robot: {start: [1.5, 0.6, 0.0]}
 
 
 @pytest.mark.parametrize(("scene", "extra", "code", "needle"), [
+    (ROOM + "sources:\n  - {object: diner plate, table: counter, position: [0.4, 2.0]}\n",
+     [], 2, "sources[0] ('diner plate').object: unknown object; did you mean 'dinner plate'"),
+    (ROOM + "sources:\n  - {object: dinner plate, table: counter, position: [0.4, 2.0]}\n"
+     "  - {object: dinner fork, table: counter, position: [0.41, 2.0]}\n",
+     [], 2, "sources[1] ('dinner fork').position"),
     (ROOM.replace("target: dining table", "target: kitchen table"), [], 2, "target"),
     (ROOM + "sources:\n  - {object: dinner plate, table: counter, position: [0.4, 3.99]}\n",
      [], 2, "sources[0]"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping, Sequence
 from os import PathLike
 from pathlib import Path
@@ -38,7 +39,8 @@ def resolve_items(request: str | None, task: int | None, catalog: Catalog,
     (default: the paper's Table I)."""
     if task is not None:
         t = get_task(task, tasks if tasks is not None else load_tasks())
-        return request or t.request, tuple(items_from_names(t.objects, catalog))
+        return request or t.request, tuple(items_from_names(t.objects, catalog,
+                                                            where=f"task {task}: objects"))
     if request is not None:
         parsed = parse_request(request, catalog)
         return parsed.text, tuple(parsed.items)
@@ -77,7 +79,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
 
     ``scene`` is a :class:`Scene`, a scene YAML file, or ``None`` for the packaged dining
     room. ``chairs`` chairs are sampled near the target table for this seed (``None``
-    keeps the scene file's own chairs, or samples one if it has none); the robot senses
+    keeps the scene file's own chairs, or samples one if it lists none; ``chairs: []``
+    in the file means no chairs); the robot senses
     them at planning time.
     ``method`` is one of :func:`available_methods`; ``tasks`` replaces the paper's Table I
     for ``task``. The same seed gives the same run.
@@ -96,7 +99,13 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     chosen = get_method(method)
     sim = create_simulator(simulator)
     base = scene if isinstance(scene, Scene) else load_scene(scene)
-    if chairs is None and not base.chairs:
+    for k, source in enumerate(base.sources):
+        kind = re.sub(r"\s+\d+$", "", source.object)
+        if catalog.lookup(kind) is None:
+            where = f"{scene}: " if scene is not None and not isinstance(scene, Scene) else ""
+            raise BadInput(f"{where}sources[{k}] ({source.object!r}).object: unknown object; "
+                           f"did you mean {', '.join(map(repr, catalog.suggest(kind))) or '?'}")
+    if chairs is None and not (base.chairs or base.chairs_listed):
         chairs = 1
     episode = prepare_episode(base, items, np.random.default_rng([seed, STAGE_SCENE]),
                               chairs=chairs)

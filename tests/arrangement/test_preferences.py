@@ -92,3 +92,22 @@ def test_a_stated_distance_replaces_template_2(chat_server) -> None:
     assert gaps[("dinner fork", "to the left of", "dinner plate")] == pytest.approx(0.02)
     assert gaps[("dinner knife", "to the right of", "dinner plate")] == pytest.approx(0.09)
     assert len(result.arrangement.llm.calls) == 1
+
+
+@pytest.mark.parametrize(("sentence", "needle"), [
+    ("the dinner fork -5 cm to the left of the dinner plate", "must not be negative"),
+    ("the dinner fork 200 cm to the left of the dinner plate", "does not fit"),
+])
+def test_bad_stated_distances(chat_server, sentence: str, needle: str) -> None:
+    chat_server.reply = scripted([TASK1_GOOD])
+    with pytest.raises(BadInput, match=needle):
+        _arrange(chat_server, ArrangeOptions(preferences=(sentence,)))
+
+
+def test_unreadable_pool_sentence_is_bad_input(chat_server) -> None:
+    chat_server.reply = scripted([TASK1_GOOD])
+    with pytest.raises(BadInput, match="cannot read 'gibberish here'"):
+        _arrange(chat_server, ArrangeOptions(preference_pool=("gibberish here",)))
+    # A readable sentence about objects not requested simply does not apply.
+    result = _arrange(chat_server, ArrangeOptions(preference_pool=("the mug lid on the mug",)))
+    assert result.arrangement.relations

@@ -102,7 +102,8 @@ def test_packaged_scene_round_trips(packaged: Scene) -> None:
     data = scene_to_dict(packaged)
     json.dumps(data)
     assert parse_scene(yaml.dump(data), "again") == packaged
-    assert set(data) >= {"room", "walls", "tables", "target", "robot", "chairs"}
+    assert set(data) >= {"room", "walls", "tables", "target", "robot"}
+    assert "chairs" not in data  # it lists none, so each episode samples its own
     assert data["robot"]["start"] == [0.8, 0.8, 0.0]
     assert data["robot"]["capacity"] == 1
 
@@ -246,3 +247,17 @@ def test_unreadable_file(tmp_path: Path, name: str) -> None:
     with pytest.raises(BadInput, match=r"^scene: cannot read '.*': ") as info:
         load_scene(path)
     assert "\n" not in str(info.value)
+
+
+def test_an_empty_chair_list_means_no_chairs(tmp_path: Path) -> None:
+    from llm_grop.api import run
+
+    text = (Path(__file__).resolve().parents[2] / "src/llm_grop/data/scenes/dining_room.yaml"
+            ).read_text()
+    path = tmp_path / "no_chairs.yaml"
+    path.write_text(text + "chairs: []\n")
+    scene = load_scene(path)
+    assert scene.chairs == () and scene.chairs_listed
+    assert run(task=1, method="grop", scene=path, seed=0).scene.chairs == ()
+    assert len(run(task=1, method="grop", seed=0).scene.chairs) == 1
+    assert scene_to_dict(scene)["chairs"] == []

@@ -200,7 +200,7 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
                      for r in overridden]
 
     gaps: dict[tuple[str, str, str | None], float] = {}
-    stated = preferences.stated_gaps(prefs)
+    stated = preferences.stated_gaps(prefs, table)
     for k, rel in enumerate(accepted):
         if rel.relation == CENTER or rel.relation in STACKING:
             continue

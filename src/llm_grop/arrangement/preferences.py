@@ -12,6 +12,7 @@ Template 2 is asked only for the others.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -24,6 +25,8 @@ from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.relation import Relation
+from llm_grop.world.request import items_from_names
+from llm_grop.world.table import Table
 
 
 def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequence[Item],
@@ -40,10 +43,17 @@ def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequen
             raise BadInput(f"--prefer: cannot read {sentence!r} as a relation between "
                            f"requested objects ({', '.join(i.name for i in items)})")
         out += parsed.relations
+    everything: tuple[Item, ...] | None = None
     for sentence in pool:
         parsed = parse_relations(sentence, items, catalog)
-        if not parsed.ignored:
+        if parsed.relations and not parsed.ignored:
             out += parsed.relations
+            continue
+        # Not about the requested objects; it must still read as a relation at all.
+        everything = everything or items_from_names(catalog.names(), catalog)
+        if not parse_relations(sentence, everything, catalog).relations:
+            raise BadInput(f"preferences: cannot read {sentence!r} as a relation between "
+                           "catalog objects")
     seen: set[tuple[str, str, str | None]] = set()
     unique = []
     for r in out:
@@ -79,13 +89,24 @@ def merge(preferences: Sequence[Relation], llm: Sequence[Relation]
     return tuple(kept), tuple(overridden)
 
 
-def stated_gaps(preferences: Sequence[Relation]) -> dict[tuple[str, str, str | None], float]:
-    """The gaps, metres, that preferences state in their sentences, by relation key."""
+def stated_gaps(preferences: Sequence[Relation], table: Table
+                ) -> dict[tuple[str, str, str | None], float]:
+    """The gaps, metres, that preferences state in their sentences, by relation key.
+
+    Raises :class:`BadInput` for a negative gap or one wider than the table.
+    """
     out = {}
     for r in preferences:
-        gap_m, defaulted = parse_distance_m(r.line or "")
-        if not defaulted:
-            out[r.key()] = gap_m
+        line = r.line or ""
+        if re.search(r"(?<![\w.])-\s*\d", line):
+            raise BadInput(f"preference {line!r}: a distance must not be negative")
+        gap_m, defaulted = parse_distance_m(line)
+        if defaulted:
+            continue
+        if gap_m > max(table.width, table.depth):
+            raise BadInput(f"preference {line!r}: {100 * gap_m:g} cm does not fit on the "
+                           f"{table.width:g} x {table.depth:g} m table")
+        out[r.key()] = gap_m
     return out
 
 

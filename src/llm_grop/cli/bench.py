@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from llm_grop.cli.options import EPILOG, llm_flags, llm_settings
+from llm_grop.cli.options import EPILOG, llm_flags_without_record, llm_settings
 from llm_grop.errors import BadInput
 
 
@@ -55,22 +55,22 @@ def parse_methods(text: str) -> tuple[str, ...]:
     return names
 
 
-def _check_preferences(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
-                       catalog_files: tuple[Path, ...]) -> None:
-    """Bad preferences are reported before any trial runs (and writes its directory)."""
+def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
+                 catalog_files: tuple[Path, ...]) -> None:
+    """Unknown objects and bad preferences are reported before any trial runs (and writes
+    its directory)."""
     from llm_grop.arrangement.preferences import read_preferences
     from llm_grop.world.catalog import Catalog
     from llm_grop.world.request import items_from_names
 
-    if not (options.preferences or options.preference_pool):
-        return
     catalog = Catalog.load(catalog_files)
     for t in tasks:
-        items = items_from_names(known[t].objects, catalog)
-        try:
-            read_preferences(options.preferences, options.preference_pool, items, catalog)
-        except BadInput as exc:
-            raise BadInput(f"task {t}: {exc}") from None
+        items = items_from_names(known[t].objects, catalog, where=f"task {t}: objects")
+        if options.preferences or options.preference_pool:
+            try:
+                read_preferences(options.preferences, options.preference_pool, items, catalog)
+            except BadInput as exc:
+                raise BadInput(f"task {t}: {exc}") from None
 
 
 @click.command(epilog=EPILOG)
@@ -98,11 +98,11 @@ def _check_preferences(tasks: tuple[int, ...], known: dict[int, Any], options: A
               type=click.Path(dir_okay=False, path_type=Path),
               help="Extra tasks (YAML, like the packaged tasks.yaml); repeatable.")
 @click.option("--no-images", is_flag=True, help="Do not draw each trial's final table.")
-@llm_flags
+@llm_flags_without_record
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
           seed: int, scene_path: Path | None, chairs: int | None, w: float,
-          task_files: tuple[Path, ...], no_images: bool, record_path: Path | None,
+          task_files: tuple[Path, ...], no_images: bool,
           catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
     """Run the paper's experiment: tasks x trials x methods, rated 1-5 (paper §IV)."""
     from rich.console import Console
@@ -120,16 +120,13 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     from llm_grop.world.scene_file import load_scene
     from llm_grop.world.tasks import load_tasks
 
-    if record_path is not None:
-        raise BadInput("--record: not available for bench; record with `llm-grop run` or "
-                       "benchmarks/record_embedded.py")
     known = load_tasks(task_files)
     tasks = parse_tasks(tasks_text, known)
     methods = parse_methods(methods_text)
     llm_options, options = llm_settings(**flags)
     if scene_path is not None:
         load_scene(scene_path)  # a bad scene is reported before any trial runs
-    _check_preferences(tasks, known, options, catalog_files)
+    _check_tasks(tasks, known, options, catalog_files)
     settings = TrialSettings(
         backend=flags["backend"], llm_options=llm_options, arrange=options,
         scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,

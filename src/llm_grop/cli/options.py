@@ -21,8 +21,9 @@ _LLM_OPTIONS = [
     click.option("--base-url", help="OpenAI-compatible endpoint (default: $OPENAI_BASE_URL)."),
     click.option("--replay", "replay_path", type=click.Path(dir_okay=False, path_type=Path),
                  help="JSONL of recorded calls, for --llm replay."),
-    click.option("--record", "record_path", type=click.Path(dir_okay=False, path_type=Path),
-                 help="Append every LLM call to this JSONL file."),
+    _RECORD := click.option("--record", "record_path",
+                            type=click.Path(dir_okay=False, path_type=Path),
+                            help="Append every LLM call to this JSONL file."),
     click.option("--catalog", "catalog_files", multiple=True,
                  type=click.Path(dir_okay=False, path_type=Path),
                  help="An extra object catalog file (repeatable)."),
@@ -55,6 +56,14 @@ def llm_flags(f: F) -> F:
     """Add the LLM and arrangement flags to a command."""
     for option in reversed(_LLM_OPTIONS):
         f = option(f)
+    return f
+
+
+def llm_flags_without_record(f: F) -> F:
+    """The LLM and arrangement flags but ``--record`` (for commands that run in parallel)."""
+    for option in reversed(_LLM_OPTIONS):
+        if option is not _RECORD:
+            f = option(f)
     return f
 
 

@@ -62,6 +62,8 @@ class Scene:
         chairs: chairs in the room, sensed at planning time.
         robot_start: the robot's start pose.
         robot: the robot's parameters.
+        chairs_listed: whether the scene states its chairs (an empty list: none), so an
+            episode keeps them instead of sampling one.
         chair_band_m: chairs are sampled between these distances (metres) from the target
             table's ±y sides (the diner's side and the far side, in the table's frame).
     """
@@ -78,6 +80,7 @@ class Scene:
     chairs: tuple[Chair, ...] = ()
     robot: Robot = field(default_factory=Robot)
     chair_band_m: tuple[float, float] = (0.0, 1.0)
+    chairs_listed: bool = False
 
     def table(self, name: str) -> SceneTable:
         """The table called ``name``; ``KeyError`` if there is none."""
@@ -119,7 +122,7 @@ class Scene:
 
     def with_chairs(self, chairs: tuple[Chair, ...]) -> Scene:
         """This scene with ``chairs`` instead of its own."""
-        return replace(self, chairs=chairs)
+        return replace(self, chairs=chairs, chairs_listed=True)
 
     def with_sources(self, sources: tuple[ObjectSource, ...]) -> Scene:
         """This scene with ``sources`` instead of its own."""

@@ -17,6 +17,7 @@ The file's layout (room frame: metres and radians, the room spans ``[0, width] x
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import fields
 from importlib import resources
@@ -46,6 +47,8 @@ from llm_grop.world.serialize import rounded
 
 #: Overlaps shallower than this (metres) are ignored, so that touching shapes and
 #: values rounded to 0.1 mm in JSON still load.
+#: Closest two pinned object starts may be, centre to centre, metres.
+_SOURCE_GAP_M = 0.05
 _TOL_M = 1e-3
 
 _Name = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]
@@ -103,7 +106,7 @@ class _SceneModel(_Strict):
     target: _Name
     source_tables: list[_Name] = []
     sources: list[_Source] = []
-    chairs: list[_Chair] = []
+    chairs: list[_Chair] | None = None
     chair_band_m: tuple[NonNegativeFloat, NonNegativeFloat] = (0.0, 1.0)
     robot: _Robot = Field(default_factory=_Robot)
 
@@ -155,7 +158,8 @@ def parse_scene(text: str, where: str) -> Scene:
             if _overlap(poly, wall):
                 raise fail(path, f"overlaps wall {j + 1}")
 
-    chairs = tuple(Chair(c.name or f"chair {k + 1}", _box(c)) for k, c in enumerate(m.chairs))
+    chairs = tuple(Chair(c.name or f"chair {k + 1}", _box(c))
+                   for k, c in enumerate(m.chairs or []))
     for k, chair in enumerate(chairs):
         path, poly = f"chairs[{k}] ({chair.name!r})", _poly(chair.box)
         if not _inside(poly, room):
@@ -182,6 +186,12 @@ def parse_scene(text: str, where: str) -> Scene:
                 raise fail(f"{path}.position", f"inside wall {j + 1}")
         if not tables[names.index(s.table)].box.contains(s.x, s.y, _TOL_M):
             raise fail(f"{path}.position", f"{at} is not on the top of table {s.table!r}")
+        for j, other in enumerate(sources[:k]):
+            if s.object == other.object:
+                raise fail(f"{path}.object", f"listed twice (sources[{j}])")
+            if math.hypot(s.x - other.x, s.y - other.y) < _SOURCE_GAP_M:
+                raise fail(f"{path}.position", f"{at} is where sources[{j}] "
+                           f"({other.object!r}) starts; keep {100 * _SOURCE_GAP_M:g} cm apart")
 
     params = {k: v for k, v in m.robot.model_dump().items() if k != "start" and v is not None}
     try:
@@ -197,7 +207,7 @@ def parse_scene(text: str, where: str) -> Scene:
         name=m.name or "dining room", width=m.room.width, depth=m.room.depth,
         tables=tables, target=m.target, robot_start=start, walls=walls,
         source_tables=tuple(m.source_tables), sources=sources, chairs=chairs, robot=robot,
-        chair_band_m=(lo, hi))
+        chair_band_m=(lo, hi), chairs_listed=m.chairs is not None)
 
 
 def load_scene(path: str | os.PathLike[str] | None = None) -> Scene:
@@ -233,7 +243,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     for f in fields(Robot):
         value = getattr(scene.robot, f.name)
         robot[f.name] = value if isinstance(value, int) else rounded(value)
-    return {
+    out: dict[str, Any] = {
         "name": scene.name,
         "room": {"width": rounded(scene.width), "depth": rounded(scene.depth)},
         "walls": [box(w) for w in scene.walls],
@@ -247,6 +257,9 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         "chair_band_m": [rounded(v) for v in scene.chair_band_m],
         "robot": robot,
     }
+    if not (scene.chairs_listed or scene.chairs):
+        del out["chairs"]
+    return out
 
 
 def _box(m: _Wall) -> Box:
