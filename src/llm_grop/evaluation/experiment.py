@@ -31,6 +31,7 @@ from typing import Any
 
 from llm_grop.errors import BadInput
 from llm_grop.evaluation.trial import TrialRunner, TrialSettings, TrialSpec
+from llm_grop.world.serialize import write_json
 
 ROWS = "trials.jsonl"
 IDENTITY = "experiment.json"
@@ -112,9 +113,7 @@ def prepare_dir(out: Path, exp: Experiment) -> None:
         raise BadInput(f"--out {out}: not empty and holds no {IDENTITY}; choose an empty "
                        "or new directory")
     out.mkdir(parents=True, exist_ok=True)
-    tmp = out / f".{IDENTITY}.tmp"
-    tmp.write_text(json.dumps(mine, indent=2) + "\n", encoding="utf-8")
-    tmp.replace(marker)
+    write_json(marker, mine)
 
 
 def read_rows(out: Path) -> list[dict[str, Any]]:
@@ -229,9 +228,7 @@ def write_reports(out: Path, rows: Sequence[dict[str, Any]]) -> Any:
     from llm_grop.render.plots import plot_rating_per_task, plot_rating_vs_time
 
     summary = summarize(rows)
-    tmp = out / ".summary.json.tmp"
-    tmp.write_text(json.dumps(summary_to_dict(summary), indent=2) + "\n", encoding="utf-8")
-    tmp.replace(out / "summary.json")
+    write_json(out / "summary.json", summary_to_dict(summary))
     (out / "summary.md").write_text(summary_markdown(summary), encoding="utf-8")
     plot_rating_vs_time(summary, out / "fig3_rating_vs_time.png")
     plot_rating_per_task(summary, out / "fig5_rating_per_task.png")

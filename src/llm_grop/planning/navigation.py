@@ -148,8 +148,7 @@ class Navigator:
 
     def segment_free(self, a: Point, b: Point, step_m: float = 0.02) -> bool:
         """Whether the base can drive straight from ``a`` to ``b``."""
-        n = max(2, math.ceil(math.dist(a, b) / step_m) + 1)
-        return bool(self.valid(np.linspace(a, b, n)).all())
+        return self.obstacles.segment_free(a, b, self.radius_m, step_m)
 
     def plan(self, start: Point, goal: Point, seed: int) -> tuple[Point, ...] | None:
         """A shortcut path from ``start`` to ``goal``, or ``None`` when none was found.
@@ -213,8 +212,3 @@ def _taut(nav: Navigator, pts: list[Point]) -> tuple[Point, ...]:
         out.append(pts[j])
         i = j
     return tuple(out)
-
-
-def path_length(path: Sequence[Point]) -> float:
-    """Length of a polyline, metres."""
-    return sum(math.dist(a, b) for a, b in zip(path, path[1:], strict=False))

@@ -50,6 +50,13 @@ class Obstacles:
             d = np.minimum(d, dist.min(axis=0))
         return np.maximum(d, 0.0)
 
+    def segment_free(self, a: tuple[float, float], b: tuple[float, float], radius_m: float,
+                     step_m: float = 0.02, tolerance_m: float = 1e-9) -> bool:
+        """Whether a disc of ``radius_m`` can move straight from ``a`` to ``b`` (checked
+        every ``step_m`` metres), touching nothing by more than ``tolerance_m``."""
+        n = max(2, math.ceil(math.dist(a, b) / step_m) + 1)
+        return bool((self.clearance(np.linspace(a, b, n)) >= radius_m - tolerance_m).all())
+
     def free(self, x: float, y: float, radius_m: float) -> bool:
         """Whether a disc of ``radius_m`` at room-frame ``(x, y)`` touches nothing."""
         if x < radius_m or y < radius_m or x > self.width - radius_m \

@@ -102,17 +102,13 @@ class _Run:
         # After noisy arrival the robot is a few cm off the planned start: keep the plan
         # when the detour to its second point is free, as a local planner would.
         if first and len(planned) > 1 and math.dist(here, planned[0]) < 0.15 \
-                and self._segment_free(here, planned[1]):
+                and self.obstacles.segment_free(here, planned[1], self.robot.base_radius_m,
+                                                tolerance_m=1e-6):
             return (here, *planned[1:])
         self.legs += 1
         seed = int(self.rng.integers(2**31))
         path = self.replan.plan(here, (goal.x, goal.y), seed=seed)
         return path if path is not None else ()
-
-    def _segment_free(self, a: Point, b: Point) -> bool:
-        n = max(2, int(math.dist(a, b) / 0.02) + 1)
-        pts = np.linspace(a, b, n)
-        return bool((self.obstacles.clearance(pts) >= self.robot.base_radius_m - 1e-6).all())
 
     def navigate(self, step: Step) -> None:
         assert step.goal is not None
