@@ -2,49 +2,143 @@
 
 An implementation of LLM-GROP (Ding, Zhang, Paxton, Zhang, IROS 2023)::
 
-    from llm_grop import arrange, Table
+    from llm_grop import arrange, run
     result = arrange("a dinner plate, a dinner fork and a dinner knife", seed=0)
     for p in result.arrangement.placements:
         print(p.name, p.x, p.y)
+    episode = run(task=8, seed=0)
+    print(episode.success, episode.execution.execution_time_s)
+
+Every name below is importable from ``llm_grop``; each is loaded on first use, so
+``import llm_grop`` stays cheap.
 """
 
-from llm_grop.api import arrange, make_llm
-from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions
-from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError
-from llm_grop.llm.base import BackendOptions, SamplingParams
-from llm_grop.world import (
-    Arrangement,
-    Catalog,
-    Configuration,
-    Item,
-    ObjectSpec,
-    Placement,
-    Relation,
-    Table,
-)
-from llm_grop.world.serialize import arrangement_from_dict, arrangement_to_dict
+from __future__ import annotations
 
-__version__ = "0.1.0"
+import importlib
+from importlib import metadata
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from llm_grop.api import arrange, available_methods, available_simulators, make_llm, run
+    from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions
+    from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError
+    from llm_grop.evaluation.rater import Rating, rate
+    from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
+    from llm_grop.llm.registry import register_backend
+    from llm_grop.methods.registry import register_method
+    from llm_grop.planning.utility import GropOptions
+    from llm_grop.render.room import draw_run
+    from llm_grop.render.table import draw_arrangement
+    from llm_grop.simulation.registry import register_simulator
+    from llm_grop.world.arrangement import Arrangement, Configuration, Item, Placement
+    from llm_grop.world.catalog import Catalog, ObjectSpec
+    from llm_grop.world.jsonio import write_json
+    from llm_grop.world.plan import RunResult
+    from llm_grop.world.relation import Relation
+    from llm_grop.world.run_json import run_to_dict
+    from llm_grop.world.scene import Scene
+    from llm_grop.world.scene_file import load_scene
+    from llm_grop.world.serialize import arrangement_from_dict, arrangement_to_dict
+    from llm_grop.world.table import Table
+
+#: Public name -> the module that defines it.
+_EXPORTS: dict[str, str] = {
+    "arrange": "llm_grop.api",
+    "available_methods": "llm_grop.api",
+    "available_simulators": "llm_grop.api",
+    "make_llm": "llm_grop.api",
+    "run": "llm_grop.api",
+    "ArrangeOptions": "llm_grop.arrangement.pipeline",
+    "ArrangementResult": "llm_grop.arrangement.pipeline",
+    "BadInput": "llm_grop.errors",
+    "Infeasible": "llm_grop.errors",
+    "LLMError": "llm_grop.errors",
+    "LLMGropError": "llm_grop.errors",
+    "Rating": "llm_grop.evaluation.rater",
+    "rate": "llm_grop.evaluation.rater",
+    "LLM": "llm_grop.llm.base",
+    "BackendOptions": "llm_grop.llm.base",
+    "CallLog": "llm_grop.llm.base",
+    "SamplingParams": "llm_grop.llm.base",
+    "register_backend": "llm_grop.llm.registry",
+    "register_method": "llm_grop.methods.registry",
+    "GropOptions": "llm_grop.planning.utility",
+    "draw_run": "llm_grop.render.room",
+    "draw_arrangement": "llm_grop.render.table",
+    "register_simulator": "llm_grop.simulation.registry",
+    "Arrangement": "llm_grop.world.arrangement",
+    "Configuration": "llm_grop.world.arrangement",
+    "Item": "llm_grop.world.arrangement",
+    "Placement": "llm_grop.world.arrangement",
+    "Catalog": "llm_grop.world.catalog",
+    "ObjectSpec": "llm_grop.world.catalog",
+    "RunResult": "llm_grop.world.plan",
+    "Relation": "llm_grop.world.relation",
+    "run_to_dict": "llm_grop.world.run_json",
+    "Scene": "llm_grop.world.scene",
+    "load_scene": "llm_grop.world.scene_file",
+    "arrangement_from_dict": "llm_grop.world.serialize",
+    "arrangement_to_dict": "llm_grop.world.serialize",
+    "write_json": "llm_grop.world.jsonio",
+    "Table": "llm_grop.world.table",
+}
 
 __all__ = [
-    "Arrangement",
     "ArrangeOptions",
+    "Arrangement",
     "ArrangementResult",
     "BackendOptions",
     "BadInput",
+    "CallLog",
     "Catalog",
     "Configuration",
+    "GropOptions",
     "Infeasible",
     "Item",
+    "LLM",
     "LLMError",
     "LLMGropError",
     "ObjectSpec",
     "Placement",
+    "Rating",
     "Relation",
+    "RunResult",
     "SamplingParams",
+    "Scene",
     "Table",
     "arrange",
     "arrangement_from_dict",
     "arrangement_to_dict",
+    "available_methods",
+    "available_simulators",
+    "draw_arrangement",
+    "draw_run",
+    "load_scene",
     "make_llm",
+    "rate",
+    "register_backend",
+    "register_method",
+    "register_simulator",
+    "run",
+    "run_to_dict",
+    "write_json",
 ]
+
+try:
+    __version__ = metadata.version("llm-grop")
+except metadata.PackageNotFoundError:  # run from a source tree that was never installed
+    __version__ = "0+unknown"
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'llm_grop' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

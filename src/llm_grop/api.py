@@ -10,8 +10,10 @@ from typing import TYPE_CHECKING
 
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
 from llm_grop.errors import BadInput
-from llm_grop.llm.base import LLM, BackendOptions, CallLog, create_llm
+from llm_grop.llm.base import LLM, BackendOptions, CallLog
+from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import available_methods, get_method
+from llm_grop.simulation.registry import DEFAULT_SIMULATOR, available_simulators
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import items_from_names, parse_request
@@ -23,7 +25,8 @@ if TYPE_CHECKING:
     from llm_grop.planning.utility import GropOptions
     from llm_grop.world.plan import RunResult
 
-__all__ = ["arrange", "available_methods", "make_llm", "resolve_items", "run"]
+__all__ = ["arrange", "available_methods", "available_simulators", "make_llm", "resolve_items",
+           "run"]
 
 
 def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
@@ -72,7 +75,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         llm_options: BackendOptions | None = None, catalog: Catalog | None = None,
         catalog_files: Sequence[str | PathLike[str]] = (),
         options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
-        simulator: str = "kinematic2d", planner: GropOptions | None = None,
+        simulator: str = DEFAULT_SIMULATOR, planner: GropOptions | None = None,
         tasks: Mapping[int, Task] | None = None,
         on_event: Callable[[str], None] | None = None) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
@@ -82,8 +85,9 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     keeps the scene file's own chairs, or samples one if it lists none; ``chairs: []``
     in the file means no chairs); the robot senses
     them at planning time.
-    ``method`` is one of :func:`available_methods`; ``tasks`` replaces the paper's Table I
-    for ``task``. The same seed gives the same run.
+    ``method`` is one of :func:`available_methods` and ``simulator`` one of
+    :func:`available_simulators` (the plan is the same whichever executes it); ``tasks``
+    replaces the paper's Table I for ``task``. The same seed gives the same run.
     """
     # Planning pulls in OMPL and scipy; import them only when a run needs them.
     import numpy as np

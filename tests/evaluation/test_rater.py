@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import ast
 import copy
 import json
 from dataclasses import FrozenInstanceError
@@ -195,66 +194,6 @@ def test_rater_ignores_relations_and_llm(name: str, catalog: Catalog) -> None:
         data = copy.deepcopy(load(name))
         mutate(data)
         assert rate(data, catalog=catalog) == base
-
-
-PLANNING_PACKAGES = ("arrangement", "planning", "methods", "simulation")
-
-
-def _imported_modules(path: Path, root: Path = SRC.parent) -> list[str]:
-    """Absolute names of every module ``path`` imports (``root`` holds ``llm_grop``)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-    package = ".".join(path.relative_to(root).with_suffix("").parts[:-1])
-    out = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            out += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                parent = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
-                base = f"{parent}.{base}" if base else parent
-            out += [base] + [f"{base}.{a.name}" for a in node.names]
-        elif isinstance(node, ast.Call) and node.args \
-                and isinstance(node.args[0], ast.Constant) \
-                and getattr(node.func, "attr", getattr(node.func, "id", "")) in (
-                    "import_module", "__import__"):
-            out.append(str(node.args[0].value))
-    return out
-
-
-def _offenders(root: Path) -> list[str]:
-    """Planning files under ``root/llm_grop`` that import or name the rater."""
-    files = [p for pkg in PLANNING_PACKAGES for p in (root / "llm_grop" / pkg).rglob("*")
-             if p.is_file() and "__pycache__" not in p.parts]
-    out = []
-    for p in files:
-        if p.suffix == ".py":
-            out += [f"{p}: imports {m}" for m in _imported_modules(p, root)
-                    if m == "llm_grop.evaluation" or m.startswith("llm_grop.evaluation.")]
-        text = p.read_text(encoding="utf-8", errors="replace")
-        if "conventions.yaml" in text or "llm_grop.evaluation" in text:
-            out.append(f"{p}: mentions the rater")
-    return out
-
-
-def test_planning_code_never_imports_the_rater() -> None:
-    assert list((SRC / "planning").glob("*.py")), "planning sources not found"
-    offenders = _offenders(SRC.parent)
-    assert not offenders, "\n".join(offenders)
-
-
-@pytest.mark.parametrize("source", [
-    "from llm_grop.evaluation.rater import rate\n",
-    "import llm_grop.evaluation\n",
-    "from llm_grop import evaluation\n",
-    "def f():\n    from ...evaluation import rules\n",
-    "import importlib\nimportlib.import_module('llm_grop.evaluation')\n",
-])
-def test_import_scan_catches_an_offender(source: str, tmp_path: Path) -> None:
-    pkg = tmp_path / "llm_grop" / "planning" / "sub"
-    pkg.mkdir(parents=True)
-    (pkg / "x.py").write_text(source)
-    assert _offenders(tmp_path)
 
 
 MALFORMED = [

@@ -8,14 +8,8 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from llm_grop.llm.base import (
-    LLM,
-    BackendOptions,
-    CallLog,
-    SamplingParams,
-    available_backends,
-    create_llm,
-)
+from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
+from llm_grop.llm.registry import available_backends, create_llm
 
 if TYPE_CHECKING:
     from conftest import ChatServer

@@ -13,8 +13,9 @@ from pathlib import Path
 import pytest
 
 from llm_grop.errors import BadInput, LLMError, LLMUnavailable
-from llm_grop.llm.base import BackendOptions, SamplingParams, create_llm
+from llm_grop.llm.base import BackendOptions, SamplingParams
 from llm_grop.llm.embedded import DEFAULT_MODEL, EmbeddedLLM
+from llm_grop.llm.registry import create_llm
 
 pytestmark = pytest.mark.embedded
 

@@ -10,8 +10,9 @@ from typing import TYPE_CHECKING
 import pytest
 
 from llm_grop.errors import LLMUnavailable
-from llm_grop.llm.base import BackendOptions, SamplingParams, create_llm
+from llm_grop.llm.base import BackendOptions, SamplingParams
 from llm_grop.llm.openai_backend import DEFAULT_MODEL, PLACEHOLDER_API_KEY, OpenAILLM
+from llm_grop.llm.registry import create_llm
 
 if TYPE_CHECKING:
     from conftest import ChatServer

@@ -11,10 +11,11 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 from llm_grop.errors import BadInput, LLMError, ReplayMissing
-from llm_grop.llm.base import BackendOptions, CallLog, SamplingParams, create_llm
+from llm_grop.llm.base import BackendOptions, CallLog, SamplingParams
 from llm_grop.llm.openai_backend import OpenAILLM
-from llm_grop.llm.replay import ReplayLLM, append_record, load_records
-from llm_grop.world.llmlog import LLMCallRecord
+from llm_grop.llm.record import LLMCallRecord, append_record, load_records
+from llm_grop.llm.registry import create_llm
+from llm_grop.llm.replay import ReplayLLM
 
 if TYPE_CHECKING:
     from conftest import ChatServer

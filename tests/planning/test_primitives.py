@@ -10,16 +10,17 @@ import shapely
 from shapely.geometry import Polygon
 
 from llm_grop.errors import Infeasible
+from llm_grop.geometry.motion import path_length_m as path_length
+from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY, ParametricFeasibility
 from llm_grop.planning.navigation import NavGraph, Navigator, cost_field
-from llm_grop.planning.occupancy import Obstacles, build_grid
+from llm_grop.planning.occupancy import build_grid
 from llm_grop.planning.standing import (
     blocked_reason,
     candidate_standing_poses,
     pickup_pose,
     reach,
 )
-from llm_grop.planning.timing import path_length_m as path_length
 from llm_grop.world.geometry2d import Box
 from llm_grop.world.robot import Robot
 from llm_grop.world.scene import Chair, ObjectSource

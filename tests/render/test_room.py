@@ -62,7 +62,7 @@ def run_result(steps: tuple[ExecutedStep, ...], unplaced: tuple[str, ...] = ()) 
                           robot_end=PLACE_AT)
     return RunResult(method="llm-grop", task=1, seed=7, request=REQUEST, planned=planned,
                      plan=plan, execution=execution, final=final, planning_time_s=0.42,
-                     scene=SCENE)
+                     scene=SCENE, simulator="kinematic2d")
 
 
 def nav(path: tuple[tuple[float, float], ...], ok: bool = True, attempt: int = 1

@@ -1,4 +1,4 @@
-"""The 2D kinematic simulator: outcomes follow the feasibility model, seeded."""
+"""The 2D kinematic simulator: outcomes follow its own true success model, seeded."""
 
 from __future__ import annotations
 
@@ -6,12 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from numpy.typing import ArrayLike
 
-from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY
+from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
-from llm_grop.planning.occupancy import Obstacles
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.simulation.kinematic2d import Kinematic2D, Kinematic2DOptions
 from llm_grop.simulation.registry import available_simulators, create_simulator
@@ -27,18 +25,22 @@ NAMES = ["dinner plate", "bread", "dinner fork"]
 
 @dataclass(frozen=True)
 class Constant:
-    """A feasibility model with fixed probabilities (within reach)."""
+    """A true success model with fixed probabilities (within reach)."""
 
     nav: float
     manip: float
 
-    def navigation(self, clearance_m: ArrayLike) -> np.ndarray:
-        c = np.asarray(clearance_m, dtype=float)
-        return np.where(c >= 0, self.nav, 0.0)
+    def navigation(self, clearance_m: float) -> float:
+        return self.nav if clearance_m >= 0 else 0.0
 
-    def manipulation(self, reach_m: ArrayLike, robot: Robot) -> np.ndarray:
-        r = np.asarray(reach_m, dtype=float)
-        return np.where((r >= robot.reach_min_m) & (r <= robot.reach_max_m), self.manip, 0.0)
+    def manipulation(self, reach_m: float, robot: Robot) -> float:
+        return self.manip if robot.reach_min_m <= reach_m <= robot.reach_max_m else 0.0
+
+
+def sim(nav: float | None = None, manip: float | None = None, **options: int) -> Kinematic2D:
+    """The simulator, with a constant truth when ``nav`` and ``manip`` are given."""
+    truth = {} if nav is None else {"outcomes": Constant(nav, manip or 0.0)}
+    return Kinematic2D(Kinematic2DOptions(**truth, **options))
 
 
 def _setup(chairs: tuple[Chair, ...] = ()):  # type: ignore[no-untyped-def]
@@ -60,15 +62,13 @@ def test_registry_has_kinematic2d() -> None:
 
 def test_same_seed_same_execution() -> None:
     scene, plan, nav = _setup()
-    runs = [Kinematic2D().execute(plan, scene, np.random.default_rng(7), replan=nav,
-                                  model=DEFAULT_FEASIBILITY) for _ in range(2)]
+    runs = [sim().execute(plan, scene, np.random.default_rng(7), replan=nav) for _ in range(2)]
     assert runs[0] == runs[1]
 
 
 def test_certain_success_places_everything_near_its_target() -> None:
     scene, plan, nav = _setup()
-    ex = Kinematic2D().execute(plan, scene, np.random.default_rng(0), replan=nav,
-                               model=Constant(1.0, 1.0))
+    ex = sim(1.0, 1.0).execute(plan, scene, np.random.default_rng(0), replan=nav)
     assert ex.success and ex.failures == 0
     targets = {p.name: p for p in plan.configuration}
     for p in ex.final:
@@ -80,9 +80,8 @@ def test_certain_success_places_everything_near_its_target() -> None:
 
 def test_impossible_manipulation_is_retried_then_abandoned() -> None:
     scene, plan, nav = _setup()
-    opts = Kinematic2DOptions(manip_attempts=4)
-    ex = Kinematic2D(opts).execute(plan, scene, np.random.default_rng(0), replan=nav,
-                                   model=Constant(1.0, 0.0))
+    ex = sim(1.0, 0.0, manip_attempts=4).execute(plan, scene, np.random.default_rng(0),
+                                                 replan=nav)
     assert not ex.success and ex.final == ()
     assert set(ex.unplaced) == set(NAMES)
     picks = [s for s in ex.steps if s.action == "pick"]
@@ -91,8 +90,7 @@ def test_impossible_manipulation_is_retried_then_abandoned() -> None:
 
 def test_failed_navigation_retries_then_falls_back() -> None:
     scene, plan, nav = _setup()
-    ex = Kinematic2D().execute(plan, scene, np.random.default_rng(0), replan=nav,
-                               model=Constant(0.0, 1.0))
+    ex = sim(0.0, 1.0).execute(plan, scene, np.random.default_rng(0), replan=nav)
     navs = [s for s in ex.steps if s.action == "navigate"]
     assert navs and not any(s.ok for s in navs)
     # 3 attempts at the first pickup goal, then the object is given up.
@@ -106,8 +104,7 @@ def test_support_that_never_arrives_leaves_its_load_on_the_table() -> None:
     steps = tuple(s if not (s.action == "pick" and s.object == "dinner plate")
                   else type(s)(**{**s.__dict__, "pose": (5.9, 3.9, 0.0)}) for s in plan.steps)
     plan = type(plan)(**{**plan.__dict__, "steps": steps})
-    ex = Kinematic2D().execute(plan, scene, np.random.default_rng(0), replan=nav,
-                               model=Constant(1.0, 1.0))
+    ex = sim(1.0, 1.0).execute(plan, scene, np.random.default_rng(0), replan=nav)
     assert "dinner plate" in ex.unplaced
     assert {p.name: p.on for p in ex.final}.get("bread", "missing") is None
 
@@ -118,8 +115,7 @@ def test_robot_never_stands_inside_a_chair() -> None:
     obstacles = Obstacles(scene, include_chairs=True)
     r = scene.robot.base_radius_m
     for seed in range(10):
-        ex = Kinematic2D().execute(plan, scene, np.random.default_rng(seed), replan=nav,
-                                   model=DEFAULT_FEASIBILITY)
+        ex = sim().execute(plan, scene, np.random.default_rng(seed), replan=nav)
         for s in ex.steps:
             if s.standing is not None:
                 c = obstacles.clearance(np.array([[s.standing.x, s.standing.y]]))[0]

@@ -31,7 +31,8 @@ def arrange(request: str | None, task: int | None, table_size: str, seed: int,
     from rich.console import Console
 
     from llm_grop.api import arrange as api_arrange
-    from llm_grop.world.serialize import arrangement_to_dict, write_json
+    from llm_grop.world.jsonio import write_json
+    from llm_grop.world.serialize import arrangement_to_dict
     from llm_grop.world.table import Table
 
     check_request("arrange", request, task)
@@ -54,7 +55,7 @@ def arrange(request: str | None, task: int | None, table_size: str, seed: int,
 
         draw_arrangement(result.arrangement, image_path)
     if not quiet:
-        from llm_grop.render.console import print_arrangement
+        from llm_grop.cli.console import print_arrangement
 
         print_arrangement(result, out)
         for label, path in (("arrangement JSON", json_path), ("picture", image_path)):

@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from llm_grop.cli.options import EPILOG, llm_flags_without_record, llm_settings
+from llm_grop.cli.options import EPILOG, SIMULATOR, llm_flags_without_record, llm_settings
 from llm_grop.errors import BadInput
 
 
@@ -92,6 +92,7 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 @click.option("--chairs", type=click.IntRange(0),
               help="Chairs sampled near the table in every trial [default: the scene's own, "
                    "else 1].")
+@SIMULATOR
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
 @click.option("--task-file", "task_files", multiple=True,
@@ -101,7 +102,7 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 @llm_flags_without_record
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
-          seed: int, scene_path: Path | None, chairs: int | None, w: float,
+          seed: int, scene_path: Path | None, chairs: int | None, simulator: str, w: float,
           task_files: tuple[Path, ...], no_images: bool,
           catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
     """Run the paper's experiment: tasks x trials x methods, rated 1-5 (paper §IV)."""
@@ -115,8 +116,11 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
         TimeRemainingColumn,
     )
 
-    from llm_grop.evaluation.experiment import Experiment, run_experiment, write_reports
-    from llm_grop.evaluation.trial import TrialSettings
+    from llm_grop.experiment.runner import Experiment, run_experiment, write_reports
+    from llm_grop.experiment.summary import print_summary
+    from llm_grop.experiment.trial import TrialSettings
+    from llm_grop.simulation.registry import create_simulator
+    from llm_grop.world.contract import TrialRow
     from llm_grop.world.scene_file import load_scene
     from llm_grop.world.tasks import load_tasks
 
@@ -124,6 +128,7 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     tasks = parse_tasks(tasks_text, known)
     methods = parse_methods(methods_text)
     llm_options, options = llm_settings(**flags)
+    create_simulator(simulator)  # an unknown simulator is reported before any trial runs
     if scene_path is not None:
         load_scene(scene_path)  # a bad scene is reported before any trial runs
     _check_tasks(tasks, known, options, catalog_files)
@@ -131,7 +136,7 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
         backend=flags["backend"], llm_options=llm_options, arrange=options,
         scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,
         task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
-        images=None if no_images else str(out_dir / "images"))
+        images=None if no_images else str(out_dir / "images"), simulator=simulator)
     exp = Experiment(tasks, trials, methods, settings, seed)
     console = Console(stderr=True)
     progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
@@ -144,10 +149,9 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
         if skipped and not quiet:
             console.print(f"resuming: {skipped} trial(s) already in {out_dir}")
 
-    def on_row(row: dict[str, Any]) -> None:
+    def on_row(row: TrialRow) -> None:
         progress.update(bar, advance=1, description=(
-            f"task {row['task']} trial {row['trial']} {row['method']}: "
-            f"rating {row['rating']}"))
+            f"task {row.task} trial {row.trial} {row.method}: rating {row.rating}"))
 
     t0 = time.perf_counter()
     with progress:
@@ -160,8 +164,6 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
         raise click.exceptions.Exit(130)
     summary = write_reports(out_dir, outcome.rows)
     if not quiet:
-        from llm_grop.evaluation.summary import print_summary
-
         out = Console()
         print_summary(summary, out)
         out.print(f"{outcome.ran} trial(s) run, {outcome.skipped} already done, "

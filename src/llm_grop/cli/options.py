@@ -52,6 +52,11 @@ _LLM_OPTIONS = [
 ]
 
 
+SIMULATOR = click.option(
+    "--simulator", default="kinematic2d", show_default=True,
+    help="The simulator that executes the plan (see `llm-grop plugins`).")
+
+
 def llm_flags(f: F) -> F:
     """Add the LLM and arrangement flags to a command."""
     for option in reversed(_LLM_OPTIONS):

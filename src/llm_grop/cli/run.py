@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
+from llm_grop.cli.options import EPILOG, SIMULATOR, check_request, llm_flags, llm_settings
 
 
 @click.command(epilog=EPILOG)
@@ -22,6 +22,7 @@ from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
               help="Seed for the scene's chairs, the LLM, the sampler, the plan and execution.")
 @click.option("--chairs", type=click.IntRange(0),
               help="Chairs to sample near the table [default: the scene's own, else 1].")
+@SIMULATOR
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -31,16 +32,17 @@ from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
 @llm_flags
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
-        chairs: int | None, w: float, json_path: Path | None, image_path: Path | None,
-        record_path: Path | None, catalog_files: tuple[Path, ...], quiet: bool,
-        **flags: Any) -> None:
+        chairs: int | None, simulator: str, w: float, json_path: Path | None,
+        image_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
+        quiet: bool, **flags: Any) -> None:
     """Set the table in a simulated dining room: arrange, plan, execute (paper §III-C)."""
     from rich.console import Console
 
     from llm_grop.api import run as api_run
+    from llm_grop.cli.console import print_run
     from llm_grop.planning.utility import GropOptions
+    from llm_grop.world.jsonio import write_json
     from llm_grop.world.run_json import run_to_dict
-    from llm_grop.world.serialize import write_json
 
     check_request("run", request, task)
     llm_options, options = llm_settings(**flags)
@@ -53,7 +55,7 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
         result = api_run(request, task=task, method=method, scene=scene_path, chairs=chairs,
                          seed=seed, llm=flags["backend"], llm_options=llm_options,
                          catalog_files=catalog_files, options=options, record=record_path,
-                         planner=GropOptions(w=w), on_event=on_event)
+                         planner=GropOptions(w=w), simulator=simulator, on_event=on_event)
     if json_path is not None:
         write_json(json_path, run_to_dict(result))
     if image_path is not None:
@@ -61,8 +63,6 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
 
         draw_run(result, image_path)
     if not quiet:
-        from llm_grop.render.console import print_run
-
         out = Console()
         print_run(result, out)
         for label, path in (("run JSON", json_path), ("picture", image_path)):

@@ -1,9 +1,11 @@
 """What the rater reads and reports: the checked objects, and one check's outcome.
 
-:func:`read_setting` turns the contract's arrangement JSON (a dict, possibly written
-by hand or by another system) into :class:`Setting`. It reads ``request``,
-``table`` and ``objects`` only, never ``relations`` or ``llm``. A malformed field
-raises :class:`~llm_grop.errors.BadInput` with one line naming it.
+:func:`read_setting` turns the contract's arrangement document (validated by
+:class:`~llm_grop.world.contract.ArrangementDoc`, possibly written by hand or by another
+system) into :class:`Setting`. It uses ``table`` and ``objects`` only, never
+``relations`` or ``llm``. What the contract's model cannot check (a name used twice, a
+support that is not there, a circle that is not round) raises
+:class:`~llm_grop.errors.BadInput` with one line naming the field.
 
 Units: metres and radians in the table frame (origin at the table-top centre, +x to
 the diner's right, +y away from the diner, who sits at the -y edge).
@@ -14,8 +16,8 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
-from typing import Any, Literal
+from dataclasses import dataclass, field
+from typing import Literal
 
 from shapely.geometry import Point, Polygon
 from shapely.geometry.base import BaseGeometry
@@ -23,6 +25,7 @@ from shapely.geometry.base import BaseGeometry
 from llm_grop.errors import BadInput
 from llm_grop.evaluation.conventions import Conventions
 from llm_grop.world.catalog import Catalog, normalize_name
+from llm_grop.world.contract import ArrangementDoc, ObjectDoc
 
 Severity = Literal["missing", "major", "minor"]
 SEVERITIES: tuple[Severity, ...] = ("missing", "major", "minor")
@@ -45,10 +48,6 @@ class Check:
     severity: Severity
     detail: str
     skipped: bool = False
-
-    def to_dict(self) -> dict[str, Any]:
-        """The check as a JSON-ready dict."""
-        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -138,23 +137,6 @@ def kind_of(name: str, catalog: Catalog) -> str:
     return spec.name if spec is not None else base
 
 
-def _number(value: Any, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise BadInput(f"{where}: expected a number, got {value!r}")
-    if not math.isfinite(value):
-        raise BadInput(f"{where}: must be finite, got {value!r}")
-    return float(value)
-
-
-def _size(value: Any, where: str) -> tuple[float, float]:
-    if not isinstance(value, list | tuple) or len(value) != 2:
-        raise BadInput(f"{where}: expected [sx, sy] in metres, got {value!r}")
-    sx, sy = (_number(v, f"{where}[{i}]") for i, v in enumerate(value))
-    if sx <= 0 or sy <= 0:
-        raise BadInput(f"{where}: sizes must be positive, got {list(value)!r}")
-    return sx, sy
-
-
 def footprint(x: float, y: float, yaw: float, shape: str, size: tuple[float, float]
               ) -> BaseGeometry:
     """The footprint polygon in the table frame (a circle of diameter ``size[0]``, or a
@@ -167,46 +149,26 @@ def footprint(x: float, y: float, yaw: float, shape: str, size: tuple[float, flo
                     for u, v in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))])
 
 
-def _read_object(i: int, o: Any, where: str, catalog: Catalog) -> Obj:
-    at = f"{where}: objects[{i}]"
-    if not isinstance(o, Mapping):
-        raise BadInput(f"{at}: expected an object with name, x, y, shape and size")
-    if "name" not in o:
-        raise BadInput(f"{at}.name: missing")
-    name = o["name"]
-    if not isinstance(name, str) or not name.strip():
-        raise BadInput(f"{at}.name: expected a non-empty string, got {name!r}")
-    at = f"{at} ({name!r})"
-    raw_kind = o.get("kind", name)
-    if not isinstance(raw_kind, str) or not raw_kind.strip():
-        raise BadInput(f"{at}.kind: expected a non-empty string, got {raw_kind!r}")
-    kind = kind_of(raw_kind, catalog)
-    for key in ("x", "y"):
-        if key not in o:
-            raise BadInput(f"{at}.{key}: missing")
-    x, y = _number(o["x"], f"{at}.x"), _number(o["y"], f"{at}.y")
-    yaw = _number(o.get("yaw", 0.0), f"{at}.yaw")
+def _read_object(i: int, o: ObjectDoc, where: str, catalog: Catalog) -> Obj:
+    at = f"{where}: objects[{i}] ({o.name!r})"
+    kind = kind_of(o.kind or o.name, catalog)
     spec = catalog.lookup(kind)
-    if "shape" in o:
-        shape = o["shape"]
-        if shape not in ("circle", "box"):
-            raise BadInput(f"{at}.shape: must be 'circle' or 'box', got {shape!r}")
+    if o.shape is not None:
+        shape = o.shape
     elif spec is not None:
         shape = spec.shape
     else:
         raise BadInput(f"{at}.shape: missing (and {kind!r} is not in the catalog)")
-    if "size" in o:
-        size = _size(o["size"], f"{at}.size")
+    if o.size is not None:
+        size = o.size
     elif spec is not None and spec.shape == shape:
         size = spec.size
     else:
         raise BadInput(f"{at}.size: missing")
     if shape == "circle" and abs(size[0] - size[1]) > 1e-6:
         raise BadInput(f"{at}.size: a circle needs [d, d], got {list(size)!r}")
-    on = o.get("on")
-    if on is not None and (not isinstance(on, str) or not on.strip()):
-        raise BadInput(f"{at}.on: expected an object name or null, got {on!r}")
-    return Obj(name, kind, x, y, yaw, shape, size, on, footprint(x, y, yaw, shape, size))
+    return Obj(o.name, kind, o.x, o.y, o.yaw, shape, size, o.on,
+               footprint(o.x, o.y, o.yaw, shape, size))
 
 
 def _rests_on(name: str, other: str, support: Mapping[str, str | None]) -> bool:
@@ -221,24 +183,11 @@ def _rests_on(name: str, other: str, support: Mapping[str, str | None]) -> bool:
     return False
 
 
-def read_setting(data: Any, requested: tuple[str, ...] | None, catalog: Catalog,
+def read_setting(doc: ArrangementDoc, requested: tuple[str, ...] | None, catalog: Catalog,
                  conv: Conventions, where: str = "arrangement") -> Setting:
-    """A :class:`Setting` from the arrangement JSON ``data`` (``relations``/``llm`` unread)."""
-    if not isinstance(data, Mapping):
-        raise BadInput(f"{where}: expected a JSON object with 'table' and 'objects'")
-    table = data.get("table")
-    if not isinstance(table, Mapping):
-        raise BadInput(f"{where}: table: missing, or not an object with a 'size'")
-    shape = table.get("shape", "rectangle")
-    if shape != "rectangle":
-        raise BadInput(f"{where}: table.shape: only 'rectangle' is supported, got {shape!r}")
-    if "size" not in table:
-        raise BadInput(f"{where}: table.size: missing")
-    width, depth = _size(table["size"], f"{where}: table.size")
-    raw = data.get("objects")
-    if not isinstance(raw, list):
-        raise BadInput(f"{where}: objects: expected a list, got {type(raw).__name__}")
-    objects = tuple(_read_object(i, o, where, catalog) for i, o in enumerate(raw))
+    """A :class:`Setting` from the arrangement document ``doc``."""
+    width, depth = doc.table.size
+    objects = tuple(_read_object(i, o, where, catalog) for i, o in enumerate(doc.objects))
     names = [o.name for o in objects]
     for i, o in enumerate(objects):
         if o.name in names[:i]:

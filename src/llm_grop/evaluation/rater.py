@@ -25,7 +25,7 @@ objects are, not what a planner meant. Lengths are metres, angles radians.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from llm_grop.errors import BadInput
@@ -34,7 +34,12 @@ from llm_grop.evaluation.conventions import Conventions, load_conventions
 from llm_grop.evaluation.model import Check, kind_of, read_setting
 from llm_grop.evaluation.rules import RULES
 from llm_grop.world.catalog import Catalog
+from llm_grop.world.contract import ArrangementDoc, CheckDoc, RatingDoc
 from llm_grop.world.request import parse_request
+from llm_grop.world.serialize import read_doc
+
+#: The arrangement JSON's fields the rater reads.
+_RATED = ("request", "table", "objects")
 
 #: What each score means (Table III of the paper, shortened).
 SCORE_MEANING = {
@@ -59,10 +64,14 @@ class Rating:
         """The checks that failed, in report order."""
         return tuple(c for c in self.checks if not c.passed)
 
+    def doc(self) -> RatingDoc:
+        """The rating as the contract's document (a trial row's ``rating_explanation``)."""
+        return RatingDoc(score=self.score, summary=self.summary,
+                         checks=[CheckDoc(**asdict(c)) for c in self.checks])
+
     def to_dict(self) -> dict[str, Any]:
         """``{"score", "summary", "checks": [...]}``, ready for JSON."""
-        return {"score": self.score, "summary": self.summary,
-                "checks": [c.to_dict() for c in self.checks]}
+        return self.doc().to_json()
 
 
 def score_of(checks: Sequence[Check]) -> int:
@@ -102,10 +111,11 @@ def requested_kinds(names: Sequence[str], catalog: Catalog) -> tuple[str, ...]:
     return tuple(out)
 
 
-def rate(arrangement: Mapping[str, Any], requested: Sequence[str] | None = None,
+def rate(arrangement: Mapping[str, Any] | ArrangementDoc, requested: Sequence[str] | None = None,
          catalog: Catalog | None = None, *, conventions: Conventions | None = None,
          where: str = "arrangement") -> Rating:
-    """Score ``arrangement`` (the contract's arrangement JSON as a dict) from 1 to 5.
+    """Score ``arrangement`` (the contract's arrangement JSON, as a dict or a validated
+    :class:`~llm_grop.world.contract.ArrangementDoc`) from 1 to 5.
 
     ``requested`` are catalog item names ("dinner fork", "dinner fork 2", a synonym
     such as "fork"); when ``None`` they are read from the JSON's ``request`` text
@@ -119,18 +129,23 @@ def rate(arrangement: Mapping[str, Any], requested: Sequence[str] | None = None,
     """
     catalog = catalog if catalog is not None else Catalog.load()
     conv = conventions if conventions is not None else load_conventions()
-    if not isinstance(arrangement, Mapping):
+    if isinstance(arrangement, ArrangementDoc):
+        doc = arrangement
+    elif isinstance(arrangement, Mapping):
+        # Only what the rater judges is validated: a malformed `relations` or `llm` is the
+        # planner's business, not the table's.
+        doc = read_doc(ArrangementDoc, {k: arrangement[k] for k in _RATED if k in arrangement},
+                       where)
+    else:
         raise BadInput(f"{where}: expected a JSON object with 'table' and 'objects'")
     kinds: tuple[str, ...] | None
     if requested is not None:
         kinds = requested_kinds(requested, catalog)
     else:
-        text = arrangement.get("request")
-        if text is not None and not isinstance(text, str):
-            raise BadInput(f"{where}: request: expected a string, got {text!r}")
+        text = doc.request
         kinds = tuple(i.kind for i in parse_request(text, catalog).items) \
-            if text and text.strip() else None
-    setting = read_setting(arrangement, kinds, catalog, conv, where)
+            if text.strip() else None
+    setting = read_setting(doc, kinds, catalog, conv, where)
     ctx = make_context(setting)
     checks = tuple(c for rule in RULES for c in rule(setting, ctx))
     score = score_of(checks)

@@ -1,16 +1,16 @@
-"""The LLM protocol, its options, the backend registry and the call log."""
+"""The LLM protocol, its sampling and construction options, and the call log."""
 
 from __future__ import annotations
 
-import importlib
+import logging
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
-from llm_grop.errors import BadInput
-from llm_grop.world.llmlog import LLMCallRecord
+from llm_grop.llm.record import LLMCallRecord, append_record
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -69,36 +69,6 @@ class LLM(Protocol):
                  ) -> LLMCallRecord: ...
 
 
-#: Backend name -> "module:factory"; factories take :class:`BackendOptions`.
-_REGISTRY: dict[str, str | Callable[[BackendOptions], LLM]] = {
-    "embedded": "llm_grop.llm.embedded:EmbeddedLLM",
-    "openai": "llm_grop.llm.openai_backend:OpenAILLM",
-    "replay": "llm_grop.llm.replay:ReplayLLM",
-}
-
-
-def register_backend(name: str, factory: Callable[[BackendOptions], LLM]) -> None:
-    """Add a backend, selectable as ``--llm NAME``."""
-    _REGISTRY[name] = factory
-
-
-def available_backends() -> list[str]:
-    """Names of every registered backend."""
-    return sorted(_REGISTRY)
-
-
-def create_llm(name: str, options: BackendOptions | None = None) -> LLM:
-    """Build the backend registered as ``name``; its heavy imports happen only here."""
-    if name not in _REGISTRY:
-        choices = ", ".join(available_backends())
-        raise BadInput(f"--llm: unknown backend {name!r}; choose from {choices}")
-    factory = _REGISTRY[name]
-    if isinstance(factory, str):
-        module, _, attr = factory.partition(":")
-        factory = getattr(importlib.import_module(module), attr)
-    return factory(options or BackendOptions())
-
-
 @dataclass
 class CallLog:
     """Wraps an :class:`LLM`, keeping every call and appending it to a record file.
@@ -129,9 +99,9 @@ class CallLog:
         try:
             record = self.llm.complete(prompt, params, grammar)
             self.calls.append(record)
+            log.debug("%s call, seed %s: %.2f s, %s completion tokens", record.backend,
+                      record.seed, record.latency_s, record.completion_tokens)
             if self.record_path is not None:
-                from llm_grop.llm.replay import append_record
-
                 append_record(self.record_path, record)
         finally:
             self.wall_s += time.perf_counter() - t0

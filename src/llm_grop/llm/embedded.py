@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 from llm_grop.errors import BadInput, LLMError, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, SamplingParams
-from llm_grop.world.llmlog import LLMCallRecord
+from llm_grop.llm.record import LLMCallRecord
 
 if TYPE_CHECKING:
     from llama_cpp import Llama, LlamaGrammar

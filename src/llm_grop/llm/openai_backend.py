@@ -26,7 +26,7 @@ import openai
 
 from llm_grop.errors import LLMUnavailable
 from llm_grop.llm.base import BackendOptions, SamplingParams
-from llm_grop.world.llmlog import LLMCallRecord
+from llm_grop.llm.record import LLMCallRecord
 
 #: The model used when ``BackendOptions.model`` is ``None``.
 DEFAULT_MODEL = "gpt-4o-mini"

@@ -32,6 +32,9 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
                 planner: GropOptions | None = None) -> RunResult:
     """Arrange, plan and execute in ``scene`` (its chairs are sensed at planning time).
 
+    ``model`` is the planner's belief of how often actions succeed; ``simulator`` decides
+    what really happens.
+
     Planning time counts the arrangement's computation without LLM calls, GROP and the
     OMPL paths. Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
     """
@@ -49,12 +52,12 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     say("executing the plan")
     execution = simulator.execute(plan, scene,
                                   np.random.default_rng([inp.seed, STAGE_SIMULATION]),
-                                  replan=navigator, model=model)
+                                  replan=navigator)
     planned = replace(proposal.arrangement, placements=plan.configuration)
     return RunResult(method=method.name, task=task, seed=inp.seed, request=inp.request,
                      planned=planned, plan=plan, execution=execution,
                      final=final_arrangement(planned, execution),
-                     planning_time_s=planning_s, scene=scene)
+                     planning_time_s=planning_s, scene=scene, simulator=simulator.name)
 
 
 def final_arrangement(planned: Arrangement, execution: Execution) -> Arrangement:

@@ -1,38 +1,58 @@
-"""The explicit registry of methods."""
+"""The registry of methods (see :mod:`llm_grop.plugins`): entry point group
+``llm_grop.methods``; an entry is a :class:`~llm_grop.methods.base.Method` whose ``name``
+is the name it is registered under."""
 
 from __future__ import annotations
 
+from typing import Any
+
 from llm_grop.errors import BadInput
 from llm_grop.methods.base import ComposedMethod, Method
+from llm_grop.plugins import Registry
 
-_METHODS: dict[str, Method] = {
-    m.name: m for m in (
-        ComposedMethod("tpra", "task planning with random arrangement and standing positions",
-                       uses_llm=False, standing="uniform", best_of_all=False),
-        ComposedMethod("latp", "LLM arrangement with task planning, random standing positions",
-                       uses_llm=True, standing="uniform", best_of_all=False),
-        ComposedMethod("grop", "random arrangement, utility-optimal task-motion plan",
-                       uses_llm=False, standing="utility", best_of_all=True),
-        ComposedMethod("llm-grop", "LLM arrangement, utility-optimal task-motion plan",
-                       uses_llm=True, standing="utility", best_of_all=True),
-    )
-}
+#: The paper's four methods (§IV).
+TPRA = ComposedMethod("tpra", "task planning with random arrangement and standing positions",
+                      uses_llm=False, standing="uniform", best_of_all=False)
+LATP = ComposedMethod("latp", "LLM arrangement with task planning, random standing positions",
+                      uses_llm=True, standing="uniform", best_of_all=False)
+GROP = ComposedMethod("grop", "random arrangement, utility-optimal task-motion plan",
+                      uses_llm=False, standing="utility", best_of_all=True)
+LLM_GROP = ComposedMethod("llm-grop", "LLM arrangement, utility-optimal task-motion plan",
+                          uses_llm=True, standing="utility", best_of_all=True)
+
+_FIELDS = ("name", "description", "uses_llm", "standing", "best_of_all")
+
+
+def _check(name: str, obj: Any, origin: str) -> None:
+    missing = [f for f in _FIELDS if not hasattr(obj, f)]
+    if missing or not callable(getattr(obj, "propose", None)) or isinstance(obj, type):
+        raise BadInput(f"--method: {origin}: {name!r} is not a method instance (it needs "
+                       f"{', '.join(_FIELDS)} and propose())")
+    if obj.name != name:
+        raise BadInput(f"--method: {origin}: method registered as {name!r} is named "
+                       f"{obj.name!r}; the two must agree")
+    if obj.standing not in ("utility", "uniform"):
+        raise BadInput(f"--method: {origin}: method {name!r}: standing must be 'utility' or "
+                       f"'uniform', got {obj.standing!r}")
+
+
+METHODS: Registry[Method] = Registry(
+    group="llm_grop.methods", kind="method", flag="--method", module=__name__,
+    builtins={m.name: f"{__name__}:{var}" for m, var in (
+        (TPRA, "TPRA"), (LATP, "LATP"), (GROP, "GROP"), (LLM_GROP, "LLM_GROP"))},
+    check=_check)
 
 
 def register_method(method: Method) -> None:
-    """Make ``method`` available under its name."""
-    _METHODS[method.name] = method
+    """Make ``method`` available under its name, in this process (and the bench's workers)."""
+    METHODS.register(method.name, method)
 
 
 def available_methods() -> list[str]:
-    """Registered method names, in registration order."""
-    return list(_METHODS)
+    """Every available method name: the paper's four first."""
+    return METHODS.names()
 
 
 def get_method(name: str) -> Method:
     """A method by name; :class:`BadInput` for an unknown one."""
-    try:
-        return _METHODS[name.strip().lower()]
-    except KeyError:
-        raise BadInput(f"--method: unknown method {name!r} "
-                       f"(available: {', '.join(available_methods())})") from None
+    return METHODS.get(name)

@@ -17,9 +17,9 @@ from typing import Literal
 import numpy as np
 
 from llm_grop.errors import Infeasible
+from llm_grop.geometry.motion import leg_duration_s
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.sequencing import best_order, supports_before
-from llm_grop.planning.timing import leg_duration_s
 from llm_grop.planning.trips import plan_trips
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement

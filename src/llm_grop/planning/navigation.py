@@ -17,7 +17,8 @@ from numpy.typing import NDArray
 from scipy import ndimage, sparse
 from scipy.sparse import csgraph
 
-from llm_grop.planning.occupancy import Floats, Obstacles, OccupancyGrid
+from llm_grop.geometry.obstacles import Floats, Obstacles
+from llm_grop.planning.occupancy import OccupancyGrid
 from llm_grop.world.scene import Scene
 
 Point = tuple[float, float]

@@ -15,8 +15,8 @@ import shapely
 from shapely.geometry import Polygon
 
 from llm_grop.errors import Infeasible
+from llm_grop.geometry.obstacles import Floats, Obstacles
 from llm_grop.planning.feasibility import FeasibilityModel
-from llm_grop.planning.occupancy import Floats, Obstacles
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import StandingPose
 from llm_grop.world.robot import Robot

@@ -1,8 +1,11 @@
 """The simulator interface.
 
 A simulator executes a :class:`~llm_grop.world.plan.Plan` in a scene and reports an
-:class:`~llm_grop.world.plan.Execution`. The planner never sees which backend runs its
-plan, so a 3D physics backend can be registered beside the 2D kinematic one.
+:class:`~llm_grop.world.plan.Execution`. It owns its ground truth: what really happens
+when the robot drives, picks and places (its own success model or physics, the true
+chairs). The planner's feasibility model is only a belief and never reaches it, and the
+planner never learns which simulator runs its plan. Backends are registered in
+:mod:`llm_grop.simulation.registry`.
 """
 
 from __future__ import annotations
@@ -11,13 +14,13 @@ from typing import Protocol
 
 import numpy as np
 
-from llm_grop.planning.feasibility import FeasibilityModel
 from llm_grop.world.plan import Execution, Plan, Point
 from llm_grop.world.scene import Scene
 
 
 class PathPlanner(Protocol):
-    """Plans a collision-free path for the base from ``start`` to ``goal`` (room frame)."""
+    """The robot's own path planner, for replanning after a failed navigation: a
+    collision-free path for the base from ``start`` to ``goal`` (room frame)."""
 
     def plan(self, start: Point, goal: Point, seed: int) -> tuple[Point, ...] | None:
         """The path's points in metres, or ``None`` when there is none."""
@@ -25,11 +28,16 @@ class PathPlanner(Protocol):
 
 
 class Simulator(Protocol):
-    """Executes plans; outcomes are drawn from ``model`` with ``rng`` (a black box)."""
+    """Executes plans. ``name`` is the name it is registered under (it goes into the run
+    JSON); all randomness comes from the ``rng`` given to :meth:`execute`."""
 
     name: str
 
     def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
-                replan: PathPlanner, model: FeasibilityModel) -> Execution:
-        """Run ``plan`` in ``scene`` (its chairs are the true ones) and report what happened."""
+                replan: PathPlanner) -> Execution:
+        """Run ``plan`` in ``scene`` (its chairs are the true ones) and report what happened.
+
+        ``final`` holds every object that reached the table where it really ended up
+        (table frame), and each successful ``place`` step's ``pose`` is where it landed.
+        """
         ...

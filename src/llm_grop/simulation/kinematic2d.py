@@ -1,12 +1,13 @@
 """A 2D kinematic simulator: the robot drives planned paths and its actions succeed or fail
-as the feasibility model says (uncertainty as a black box, as in the paper).
+with the simulator's own true probabilities (:mod:`llm_grop.simulation.outcomes`;
+uncertainty as a black box, as in the paper).
 
 * Navigation follows the path at the robot's speed, turning in place between segments.
-  It succeeds with the model's probability for the goal's true clearance (real chairs);
+  It succeeds with the true probability for the goal's true clearance (real chairs);
   a failed attempt stops part-way and the robot replans from where it stopped. After
   ``nav_attempts`` failures it tries the plan's next fallback standing position; when all
   fail, the object is abandoned.
-* Arrival has Gaussian pose noise; picks and places succeed with the model's probability
+* Arrival has Gaussian pose noise; picks and places succeed with their true probability
   for the real reach, retried up to ``manip_attempts`` times.
 * A placed object lands at its target plus small Gaussian noise. An object whose support
   never arrived rests on the table. The final arrangement is read from where objects are.
@@ -15,14 +16,14 @@ as the feasibility model says (uncertainty as a black box, as in the paper).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from llm_grop.planning.feasibility import FeasibilityModel
-from llm_grop.planning.occupancy import Obstacles
-from llm_grop.planning.timing import leg_duration_s, path_length_m
+from llm_grop.geometry.motion import leg_duration_s, path_length_m, path_prefix
+from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner
+from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
 from llm_grop.world.arrangement import Placement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point, Step
@@ -31,9 +32,10 @@ from llm_grop.world.scene import Scene
 
 @dataclass(frozen=True)
 class Kinematic2DOptions:
-    """Noise and retry settings.
+    """The simulated world's truth: success probabilities, noise and retry settings.
 
     Attributes:
+        outcomes: how often navigation, picks and places really succeed.
         nav_attempts: attempts per navigation goal (the authors used 3).
         manip_attempts: attempts per pick or place.
         nav_noise_std_m: standard deviation of the arrival position, per axis, metres.
@@ -50,6 +52,7 @@ class Kinematic2DOptions:
     place_noise_std_m: float = 0.005
     place_yaw_noise_std_rad: float = 0.02
     stop_fraction: tuple[float, float] = (0.3, 0.9)
+    outcomes: Outcomes = field(default_factory=ParametricOutcomes)
 
 
 class Kinematic2D:
@@ -61,9 +64,9 @@ class Kinematic2D:
         self.options = options or Kinematic2DOptions()
 
     def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
-                replan: PathPlanner, model: FeasibilityModel) -> Execution:
+                replan: PathPlanner) -> Execution:
         """Run ``plan`` in ``scene``; its chairs are the real ones."""
-        run = _Run(self.options, plan, scene, rng, replan, model)
+        run = _Run(self.options, plan, scene, rng, replan)
         for step in plan.steps:
             if step.object in run.abandoned:
                 continue
@@ -81,9 +84,9 @@ class _Run:
     """The state of one execution."""
 
     def __init__(self, options: Kinematic2DOptions, plan: Plan, scene: Scene,
-                 rng: np.random.Generator, replan: PathPlanner, model: FeasibilityModel) -> None:
+                 rng: np.random.Generator, replan: PathPlanner) -> None:
         self.o, self.plan, self.scene, self.rng = options, plan, scene, rng
-        self.replan, self.model, self.robot = replan, model, scene.robot
+        self.replan, self.truth, self.robot = replan, options.outcomes, scene.robot
         self.obstacles = Obstacles(scene, include_chairs=True)
         self.pose = scene.robot_start
         self.time_s = 0.0
@@ -113,7 +116,7 @@ class _Run:
     def navigate(self, step: Step) -> None:
         assert step.goal is not None
         for k, goal in enumerate((step.goal, *step.alternatives)):
-            p = float(self.model.navigation(np.array([self._clearance(goal.x, goal.y)]))[0])
+            p = self.truth.navigation(self._clearance(goal.x, goal.y))
             for attempt in range(1, self.o.nav_attempts + 1):
                 path = self._path(goal, step.path, first=(k == 0 and attempt == 1))
                 if not path:
@@ -128,7 +131,7 @@ class _Run:
                     self.pose = self._arrive(goal)
                     return
                 frac = float(self.rng.uniform(*self.o.stop_fraction))
-                driven = _prefix(path, frac * length)
+                driven = path_prefix(path, frac * length)
                 self._record(ExecutedStep("navigate", False, frac * length / self.robot.speed_mps,
                                           step.object, goal, driven, attempt=attempt,
                                           note="navigation failed"))
@@ -156,7 +159,7 @@ class _Run:
             q = self.scene.table_to_room(t.x, t.y)
             xy, duration = (q.x, q.y), self.robot.place_time_s
         reach = math.hypot(xy[0] - self.pose.x, xy[1] - self.pose.y)
-        p = float(self.model.manipulation(np.array([reach]), self.robot)[0])
+        p = self.truth.manipulation(reach, self.robot)
         standing = self.pose
         for attempt in range(1, self.o.manip_attempts + 1):
             ok = bool(self.rng.random() < p)
@@ -184,17 +187,3 @@ class _Run:
         self.out.append(step)
         self.time_s += step.duration_s
 
-
-def _prefix(path: tuple[Point, ...], distance_m: float) -> tuple[Point, ...]:
-    """The first ``distance_m`` metres of ``path``."""
-    out = [path[0]]
-    left = distance_m
-    for a, b in zip(path, path[1:], strict=False):
-        seg = math.dist(a, b)
-        if seg >= left:
-            f = left / seg if seg > 0 else 0.0
-            out.append((a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])))
-            return tuple(out)
-        out.append(b)
-        left -= seg
-    return tuple(out)

@@ -1,30 +1,48 @@
-"""The explicit registry of simulators (see :mod:`llm_grop.simulation.base`)."""
+"""The registry of simulators (see :mod:`llm_grop.plugins`): entry point group
+``llm_grop.simulators``; an entry is a factory ``() -> Simulator``."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 from llm_grop.errors import BadInput
+from llm_grop.plugins import Registry
 from llm_grop.simulation.base import Simulator
-from llm_grop.simulation.kinematic2d import Kinematic2D
 
-_REGISTRY: dict[str, Callable[[], Simulator]] = {"kinematic2d": Kinematic2D}
+Factory = Callable[[], Simulator]
+
+#: The simulator ``run`` and ``bench`` use unless told otherwise.
+DEFAULT_SIMULATOR = "kinematic2d"
 
 
-def register_simulator(name: str, factory: Callable[[], Simulator]) -> None:
-    """Make a simulator available under ``name``."""
-    _REGISTRY[name] = factory
+def _check(name: str, obj: Any, origin: str) -> None:
+    if not callable(obj):
+        raise BadInput(f"--simulator: {origin}: simulator {name!r} is not a factory "
+                       "() -> Simulator")
+
+
+SIMULATORS: Registry[Factory] = Registry(
+    group="llm_grop.simulators", kind="simulator", flag="--simulator", module=__name__,
+    builtins={"kinematic2d": "llm_grop.simulation.kinematic2d:Kinematic2D"}, check=_check)
+
+
+def register_simulator(name: str, factory: Factory) -> None:
+    """Make a simulator available as ``--simulator NAME`` in this process (and the bench's
+    workers)."""
+    SIMULATORS.register(name, factory)
 
 
 def available_simulators() -> list[str]:
-    """Registered simulator names, sorted."""
-    return sorted(_REGISTRY)
+    """Names of every available simulator."""
+    return SIMULATORS.names()
 
 
-def create_simulator(name: str) -> Simulator:
-    """A new simulator by name; :class:`BadInput` for an unknown one."""
-    try:
-        return _REGISTRY[name]()
-    except KeyError:
-        raise BadInput(f"--simulator: unknown simulator {name!r} "
-                       f"(available: {', '.join(available_simulators())})") from None
+def create_simulator(name: str = DEFAULT_SIMULATOR) -> Simulator:
+    """A new simulator by name; :class:`BadInput` for an unknown or malformed one."""
+    sim = SIMULATORS.get(name)()
+    key = name.strip().lower()
+    if getattr(sim, "name", None) != key or not callable(getattr(sim, "execute", None)):
+        raise BadInput(f"--simulator: {SIMULATORS.origin(key)}: simulator {key!r} must have "
+                       f"name {key!r} and an execute() method")
+    return sim

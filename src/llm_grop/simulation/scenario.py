@@ -19,8 +19,8 @@ from shapely.geometry import box as rect
 from llm_grop.errors import BadInput, Infeasible
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Box
+from llm_grop.world.jsonio import rounded
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
-from llm_grop.world.serialize import rounded
 
 #: Radius of the disc an object occupies on a supply table while it waits, metres.
 OBJECT_RADIUS_M = 0.06

@@ -2,7 +2,7 @@
 
 from llm_grop.world.arrangement import Arrangement, Configuration, Item, Placement
 from llm_grop.world.catalog import Catalog, ObjectSpec
-from llm_grop.world.llmlog import LLMCallRecord, LLMSummary
+from llm_grop.world.llmlog import LLMSummary
 from llm_grop.world.relation import RELATION_NAMES, Relation
 from llm_grop.world.table import Table
 
@@ -12,7 +12,6 @@ __all__ = [
     "Catalog",
     "Configuration",
     "Item",
-    "LLMCallRecord",
     "LLMSummary",
     "ObjectSpec",
     "Placement",

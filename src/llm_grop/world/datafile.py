@@ -43,7 +43,8 @@ def field_path(raw: Any, loc: tuple[int | str, ...], label_key: str) -> str:
             label = f"[{key}]"
             if isinstance(node, list) and key < len(node):
                 node = node[key]
-                if isinstance(node, dict) and label_key in node and not parts[1:]:
+                if isinstance(node, dict) and str(node.get(label_key, "")).strip() \
+                        and not parts[1:]:
                     label += f" ({label_key} {node[label_key]!r})" if label_key == "id" \
                         else f" ({node[label_key]!r})"
             parts.append(label)

@@ -1,22 +1,36 @@
-"""Records of LLM calls, kept with an arrangement (no LLM code here)."""
+"""What an arrangement keeps of the LLM calls behind it (no LLM code here).
+
+The LLM layer owns its call record (:class:`llm_grop.llm.record.LLMCallRecord`); the world
+only describes what it reads of one, as a protocol, so it imports nothing from that layer.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 
-@dataclass(frozen=True)
-class LLMCallRecord:
-    """One LLM call: the prompt, the response, latency in seconds and token counts."""
+class CallRecord(Protocol):
+    """One LLM call as an arrangement keeps it: prompt, response, latency in seconds,
+    token counts and the call's seed."""
 
-    backend: str
-    model: str
-    prompt: str
-    response: str
-    latency_s: float
-    prompt_tokens: int | None = None
-    completion_tokens: int | None = None
-    seed: int | None = None
+    @property
+    def prompt(self) -> str: ...
+
+    @property
+    def response(self) -> str: ...
+
+    @property
+    def latency_s(self) -> float: ...
+
+    @property
+    def prompt_tokens(self) -> int | None: ...
+
+    @property
+    def completion_tokens(self) -> int | None: ...
+
+    @property
+    def seed(self) -> int | None: ...
 
 
 @dataclass(frozen=True)
@@ -25,4 +39,4 @@ class LLMSummary:
 
     backend: str
     model: str
-    calls: tuple[LLMCallRecord, ...] = ()
+    calls: tuple[CallRecord, ...] = ()

@@ -128,8 +128,9 @@ class Execution:
 @dataclass(frozen=True)
 class RunResult:
     """One episode (the contract's run JSON): the planned arrangement, the plan, its
-    execution, the final arrangement, planning time in seconds (LLM calls excluded) and the
-    scene with the chairs that were sensed."""
+    execution, the final arrangement, planning time in seconds (LLM calls excluded), the
+    scene with the chairs that were sensed, and the name of the simulator that executed
+    the plan."""
 
     method: str
     task: int | None
@@ -141,6 +142,7 @@ class RunResult:
     final: Arrangement
     planning_time_s: float
     scene: Scene
+    simulator: str
 
     @property
     def success(self) -> bool:

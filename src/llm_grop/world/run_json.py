@@ -1,27 +1,31 @@
-"""The contract's run JSON (``llm-grop run --json``), written from a :class:`RunResult`.
+"""The contract's run JSON (``llm-grop run --json``), built from a :class:`RunResult` as a
+:class:`~llm_grop.world.contract.RunDoc`.
 
 Besides the contract's fields it holds the planned arrangement, the plan's expected
-utility, feasibility and cost, the failures, and the scene with the sensed chairs. For
-the same seed and inputs it is identical except for measured wall times
+utility, feasibility and cost, the failures, the simulator, and the scene with the sensed
+chairs. For the same seed and inputs it is identical except for measured wall times
 (``planning_time_s`` and the LLM calls' ``latency_s``).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
+from llm_grop.world.contract import PlanDoc, RunDoc, StandingDoc, StepDoc
 from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.jsonio import rounded
 from llm_grop.world.plan import ExecutedStep, Plan, RunResult
-from llm_grop.world.scene_file import scene_to_dict
-from llm_grop.world.serialize import arrangement_to_dict, rounded
+from llm_grop.world.scene_file import SceneFile, scene_to_dict
+from llm_grop.world.serialize import arrangement_doc
 
 
-def pose_list(p: Pose2D) -> list[float]:
+def pose_list(p: Pose2D) -> tuple[float, float, float]:
     """``[x, y, theta]`` rounded to 0.1 mm / 0.1 mrad."""
-    return [rounded(p.x), rounded(p.y), rounded(p.theta)]
+    return (rounded(p.x), rounded(p.y), rounded(p.theta))
 
 
-def executed_step_to_dict(s: ExecutedStep) -> dict[str, Any]:
+def step_doc(s: ExecutedStep) -> StepDoc:
     """One executed action (failed attempts included)."""
     out: dict[str, Any] = {"action": s.action}
     if s.object is not None:
@@ -31,49 +35,50 @@ def executed_step_to_dict(s: ExecutedStep) -> dict[str, Any]:
     if s.standing is not None:
         out["standing"] = pose_list(s.standing)
     if s.pose is not None:
-        out["pose"] = [rounded(v) for v in s.pose]
+        out["pose"] = tuple(rounded(v) for v in s.pose)
     out |= {"duration_s": round(s.duration_s, 3), "ok": s.ok, "attempt": s.attempt}
     if s.note:
         out["note"] = s.note
     if s.path:
-        out["path"] = [[rounded(x), rounded(y)] for x, y in s.path]
-    return out
+        out["path"] = [(rounded(x), rounded(y)) for x, y in s.path]
+    return StepDoc(**out)
 
 
-def plan_to_dict(plan: Plan) -> dict[str, Any]:
+def plan_doc(plan: Plan) -> PlanDoc:
     """The chosen plan: order, standing positions and its expected utility, feasibility and
     cost (seconds), and which of the M configurations it realises."""
     standing = {s.object: pose_list(s.standing) for s in plan.steps
                 if s.action == "place" and s.standing is not None}
-    return {
-        "order": list(plan.order),
-        "standing": [{"object": o, "pose": standing[o]} for o in plan.order if o in standing],
-        "configuration_index": plan.configuration_index,
-        "configurations": plan.configurations_considered,
-        "expected_utility": round(plan.utility, 3),
-        "feasibility": round(plan.feasibility, 4),
-        "expected_cost_s": round(plan.cost_s, 3),
-        "expected_duration_s": round(sum(s.duration_s for s in plan.steps), 3),
-    }
+    return PlanDoc(
+        order=list(plan.order),
+        standing=[StandingDoc(object=o, pose=standing[o]) for o in plan.order if o in standing],
+        configuration_index=plan.configuration_index,
+        configurations=plan.configurations_considered,
+        expected_utility=round(plan.utility, 3),
+        feasibility=round(plan.feasibility, 4),
+        expected_cost_s=round(plan.cost_s, 3),
+        expected_duration_s=round(sum(s.duration_s for s in plan.steps), 3))
 
 
-def run_to_dict(r: RunResult, simulator: str = "kinematic2d") -> dict[str, Any]:
-    """The run JSON as a dict."""
+def run_doc(r: RunResult, *, llm_log: bool = True) -> RunDoc:
+    """The run JSON's document of ``r``; ``llm_log=False`` leaves the LLM's call log out of
+    ``planned`` (its backend, model and call count stay)."""
     ex = r.execution
-    planned = arrangement_to_dict(r.planned)
-    final = arrangement_to_dict(r.final)
-    final.pop("llm", None)
-    return {
-        "method": r.method, "task": r.task, "seed": r.seed, "request": r.request,
-        "success": ex.success,
-        "execution_time_s": round(ex.execution_time_s, 3),
-        "planning_time_s": round(r.planning_time_s, 4),
-        "failures": ex.failures,
-        "unplaced": list(ex.unplaced),
-        "steps": [executed_step_to_dict(s) for s in ex.steps],
-        "final": final,
-        "plan": plan_to_dict(r.plan),
-        "planned": planned,
-        "simulator": simulator,
-        "scene": scene_to_dict(r.scene),
-    }
+    return RunDoc(
+        method=r.method, task=r.task, seed=r.seed, request=r.request,
+        success=ex.success,
+        execution_time_s=round(ex.execution_time_s, 3),
+        planning_time_s=round(r.planning_time_s, 4),
+        failures=ex.failures,
+        unplaced=list(ex.unplaced),
+        steps=[step_doc(s) for s in ex.steps],
+        final=arrangement_doc(replace(r.final, llm=None)),
+        plan=plan_doc(r.plan),
+        planned=arrangement_doc(r.planned, llm_log=llm_log),
+        simulator=r.simulator,
+        scene=SceneFile.model_validate(scene_to_dict(r.scene)))
+
+
+def run_to_dict(r: RunResult) -> dict[str, Any]:
+    """The run JSON as a dict."""
+    return run_doc(r).to_json()

@@ -41,9 +41,9 @@ from shapely.geometry import box as rect
 from llm_grop.errors import BadInput
 from llm_grop.world.datafile import load_yaml_model
 from llm_grop.world.geometry2d import Box, Pose2D
+from llm_grop.world.jsonio import rounded
 from llm_grop.world.robot import Robot
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
-from llm_grop.world.serialize import rounded
 
 #: Overlaps shallower than this (metres) are ignored, so that touching shapes and
 #: values rounded to 0.1 mm in JSON still load.
@@ -56,37 +56,39 @@ _XY = tuple[FiniteFloat, FiniteFloat]
 _Size = tuple[PositiveFloat, PositiveFloat]
 
 
-class _Strict(BaseModel):
+class _SceneModel(BaseModel):
+    """A part of a scene file: unknown keys are typos, so they are refused."""
+
     model_config = ConfigDict(extra="forbid")
 
 
-class _Room(_Strict):
+class RoomEntry(_SceneModel):
     width: PositiveFloat
     depth: PositiveFloat
 
 
-class _Wall(_Strict):
+class WallEntry(_SceneModel):
     center: _XY
     size: _Size
     yaw: FiniteFloat = 0.0
 
 
-class _Table(_Wall):
+class TableEntry(WallEntry):
     name: _Name
     height: PositiveFloat = 0.75
 
 
-class _Chair(_Wall):
+class ChairEntry(WallEntry):
     name: _Name | None = None
 
 
-class _Source(_Strict):
+class SourceEntry(_SceneModel):
     object: _Name
     table: _Name
     position: _XY
 
 
-class _Robot(_Strict):
+class RobotEntry(_SceneModel):
     start: tuple[FiniteFloat, FiniteFloat, FiniteFloat] = (0.5, 0.5, 0.0)
     base_radius_m: FiniteFloat | None = None
     reach_min_m: FiniteFloat | None = None
@@ -98,17 +100,19 @@ class _Robot(_Strict):
     capacity: StrictInt | None = None
 
 
-class _SceneModel(_Strict):
+class SceneFile(_SceneModel):
+    """A scene file (and the run JSON's ``scene``), before its geometry is checked."""
+
     name: _Name | None = None
-    room: _Room
-    walls: list[_Wall] = []
-    tables: list[_Table]
+    room: RoomEntry
+    walls: list[WallEntry] = []
+    tables: list[TableEntry]
     target: _Name
     source_tables: list[_Name] = []
-    sources: list[_Source] = []
-    chairs: list[_Chair] | None = None
+    sources: list[SourceEntry] = []
+    chairs: list[ChairEntry] | None = None
     chair_band_m: tuple[NonNegativeFloat, NonNegativeFloat] = (0.0, 1.0)
-    robot: _Robot = Field(default_factory=_Robot)
+    robot: RobotEntry = Field(default_factory=RobotEntry)
 
 
 def parse_scene(text: str, where: str) -> Scene:
@@ -116,7 +120,7 @@ def parse_scene(text: str, where: str) -> Scene:
 
     Raises :class:`BadInput` with one line ``<where>: <field path>: <reason>``.
     """
-    m = load_yaml_model(text, where, _SceneModel, "tables", "name")
+    m = load_yaml_model(text, where, SceneFile, "tables", "name")
 
     def fail(path: str, reason: str) -> BadInput:
         return BadInput(f"{where}: {path}: {reason}")
@@ -262,7 +266,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     return out
 
 
-def _box(m: _Wall) -> Box:
+def _box(m: WallEntry) -> Box:
     return Box(m.center[0], m.center[1], m.size[0], m.size[1], m.yaw)
 
 

@@ -10,8 +10,7 @@ import pytest
 from matplotlib.image import imread
 
 from llm_grop.errors import BadInput
-from llm_grop.evaluation.summary import Summary, summarize
-from llm_grop.render.plots import (
+from llm_grop.experiment.plots import (
     BARS_FIGSIZE_IN,
     METHOD_STYLES,
     SCATTER_FIGSIZE_IN,
@@ -20,17 +19,16 @@ from llm_grop.render.plots import (
     plot_rating_per_task,
     plot_rating_vs_time,
 )
+from llm_grop.experiment.summary import Summary, summarize
 from llm_grop.render.table import DPI
+from rows import trial_row
 
 PLOTS = (plot_rating_vs_time, plot_rating_per_task)
 
 
 def row(method: str, task: int, rating: int, execution: float | None,
         trial: int = 0) -> dict[str, Any]:
-    return {"method": method, "task": task, "trial": trial, "seed": trial, "success":
-            execution is not None, "rating": rating, "execution_time_s": execution,
-            "planning_time_s": 0.01 if execution is not None else None,
-            "status": "ok" if execution is not None else "infeasible"}
+    return trial_row(method, task, rating, execution, trial=trial)
 
 
 def full_summary() -> Summary:

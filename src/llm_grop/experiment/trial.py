@@ -2,28 +2,42 @@
 
 A trial runs the whole pipeline (:func:`llm_grop.api.run`), rates the final arrangement
 with the automatic rater, draws the final table as the paper's raters saw it, and returns
-one JSONL row: the contract's run JSON plus the rating, its checks and per-trial counts.
-A trial whose arrangement or plan is infeasible still gives a row (``status``
-``"infeasible"``, nothing on the table, rated accordingly).
+one :class:`~llm_grop.world.contract.TrialRow`: the contract's run JSON (without the LLM's
+call log) plus the rating, its checks and per-trial counts. A trial whose arrangement or
+plan is infeasible still gives a row (``status`` ``"infeasible"``, nothing on the table,
+rated accordingly).
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from llm_grop.api import run
 from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.errors import Infeasible
-from llm_grop.llm.base import LLM, BackendOptions, CallLog, create_llm
+from llm_grop.evaluation.rater import rate
+from llm_grop.llm.base import LLM, BackendOptions, CallLog
+from llm_grop.llm.registry import create_llm
+from llm_grop.methods.registry import get_method
+from llm_grop.planning.utility import GropOptions
+from llm_grop.render.table import draw_arrangement
+from llm_grop.simulation.registry import DEFAULT_SIMULATOR
 from llm_grop.world.arrangement import Arrangement
 from llm_grop.world.catalog import Catalog
+from llm_grop.world.contract import TrialRow
 from llm_grop.world.request import items_from_names
+from llm_grop.world.run_json import run_doc
 from llm_grop.world.scene import Scene
-from llm_grop.world.serialize import arrangement_to_dict
+from llm_grop.world.scene_file import load_scene
+from llm_grop.world.serialize import arrangement_doc
 from llm_grop.world.tasks import Task, load_tasks
 
-#: Run-JSON fields that hold wall-clock measurements; everything else repeats exactly.
+log = logging.getLogger(__name__)
+
+#: Trial-row fields that hold wall-clock measurements; everything else repeats exactly.
 TIMING_FIELDS = ("planning_time_s", "llm_time_s")
 
 
@@ -47,8 +61,9 @@ class TrialSettings:
     """What every trial of an experiment shares (picklable, for worker processes).
 
     ``scene``: a scene YAML path or ``None`` for the packaged room; ``chairs``: chairs per
-    episode; ``w``: GROP's utility weight, seconds; ``images``: where to draw each trial's
-    final table (``None``: no pictures).
+    episode; ``w``: GROP's utility weight, seconds; ``simulator``: the simulator that
+    executes every plan; ``images``: where to draw each trial's final table (``None``: no
+    pictures).
     """
 
     backend: str = "replay"
@@ -60,14 +75,13 @@ class TrialSettings:
     task_files: tuple[str, ...] = ()
     catalog_files: tuple[str, ...] = ()
     images: str | None = None
+    simulator: str = DEFAULT_SIMULATOR
 
 
 class TrialRunner:
     """Runs trials with one LLM, catalog and scene, loaded once (one per worker process)."""
 
     def __init__(self, settings: TrialSettings) -> None:
-        from llm_grop.world.scene_file import load_scene
-
         self.settings = settings
         self.catalog = Catalog.load(settings.catalog_files)
         self.tasks: dict[int, Task] = load_tasks(settings.task_files)
@@ -81,64 +95,49 @@ class TrialRunner:
             self._backend = create_llm(self.settings.backend, self.settings.llm_options)
         return CallLog(self._backend)
 
-    def __call__(self, spec: TrialSpec) -> dict[str, Any]:
-        """The trial's JSONL row."""
-        from llm_grop.api import run
-        from llm_grop.methods.registry import get_method
-        from llm_grop.planning.utility import GropOptions
-        from llm_grop.world.run_json import run_to_dict
-
+    def __call__(self, spec: TrialSpec) -> TrialRow:
+        """The trial's row."""
         task = self.tasks[spec.task]
-        uses_llm = get_method(spec.method).uses_llm
-        log = self.llm() if uses_llm else None
+        log_ = self.llm() if get_method(spec.method).uses_llm else None
+        episode: dict[str, Any]
         try:
             result = run(task=spec.task, tasks=self.tasks, method=spec.method, scene=self.scene,
                          chairs=self.settings.chairs, seed=spec.seed,
-                         llm=log if log is not None else "replay", catalog=self.catalog,
-                         options=self.settings.arrange, planner=GropOptions(w=self.settings.w))
+                         llm=log_ if log_ is not None else "replay", catalog=self.catalog,
+                         options=self.settings.arrange, planner=GropOptions(w=self.settings.w),
+                         simulator=self.settings.simulator)
         except Infeasible as exc:
-            row = self._infeasible(spec, task, str(exc))
+            log.info("task %d trial %d %s: infeasible: %s", spec.task, spec.trial,
+                     spec.method, exc)
             final = Arrangement(task.request, self.scene.target_top, ())
+            items = [i.name for i in items_from_names(task.objects, self.catalog)]
+            episode = {"method": spec.method, "task": spec.task, "seed": spec.seed,
+                       "request": task.request, "success": False, "execution_time_s": None,
+                       "planning_time_s": None, "failures": 0, "unplaced": items,
+                       "steps": [], "final": arrangement_doc(final),
+                       "simulator": self.settings.simulator, "status": "infeasible",
+                       "reason": str(exc), "retries": 0}
         else:
-            row = run_to_dict(result)
             final = result.final
-            llm = row.get("planned", {}).get("llm")
-            if isinstance(llm, dict):
-                llm.pop("log", None)
-            row["status"] = "ok"
-            row["retries"] = sum(s.attempt > 1 for s in result.execution.steps)
-        calls = log.calls if log else []
-        row.update(trial=spec.trial, llm_calls=len(calls),
-                   llm_prompt_tokens=sum(c.prompt_tokens or 0 for c in calls),
-                   llm_completion_tokens=sum(c.completion_tokens or 0 for c in calls),
-                   llm_time_s=round(log.wall_s, 4) if log else 0.0)
-        self._rate(row, task)
+            doc = run_doc(result, llm_log=False)
+            episode = {k: getattr(doc, k) for k in doc.model_fields_set} | {
+                "status": "ok", "retries": sum(s.attempt > 1 for s in result.execution.steps)}
+        calls = log_.calls if log_ else []
+        rating = rate(episode["final"], requested=list(task.objects), catalog=self.catalog)
+        extra: dict[str, Any] = {}
         if self.settings.images is not None:
-            row["image"] = self._draw(spec, task, final)
-        return row
-
-    def _infeasible(self, spec: TrialSpec, task: Task, reason: str) -> dict[str, Any]:
-        items = [i.name for i in items_from_names(task.objects, self.catalog)]
-        empty = Arrangement(task.request, self.scene.target_top, ())
-        return {"method": spec.method, "task": spec.task, "seed": spec.seed,
-                "request": task.request, "success": False, "status": "infeasible",
-                "reason": reason, "execution_time_s": None, "planning_time_s": None,
-                "failures": 0, "retries": 0, "unplaced": items, "steps": [],
-                "final": arrangement_to_dict(empty)}
-
-    def _rate(self, row: dict[str, Any], task: Task) -> None:
-        from llm_grop.evaluation.rater import rate
-
-        rating = rate(row["final"], requested=list(task.objects), catalog=self.catalog)
-        data = rating.to_dict()
-        row["rating"] = rating.score
-        row["rating_explanation"] = data
+            extra["image"] = self._draw(spec, task, final)
+        return TrialRow(
+            **episode, trial=spec.trial, llm_calls=len(calls),
+            llm_prompt_tokens=sum(c.prompt_tokens or 0 for c in calls),
+            llm_completion_tokens=sum(c.completion_tokens or 0 for c in calls),
+            llm_time_s=round(log_.wall_s, 4) if log_ else 0.0,
+            rating=rating.score, rating_explanation=rating.doc(), **extra)
 
     def _draw(self, spec: TrialSpec, task: Task, final: Arrangement) -> str:
-        from llm_grop.render.table import draw_arrangement
-
         name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}.png"
         assert self.settings.images is not None
         path = Path(self.settings.images) / name
         draw_arrangement(final, path, title="Requested: " + ", ".join(task.objects))
         return f"images/{name}"
+

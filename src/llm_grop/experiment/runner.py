@@ -3,9 +3,10 @@
 An output directory holds one experiment:
 
 * ``experiment.json``: what makes results comparable (LLM, scene, chairs, sampler and
-  planner settings, task and catalog files, version). A directory holding a different
+  planner settings, simulator, task and catalog files, version). A directory holding a different
   experiment is refused, so results are never mixed.
-* ``trials.jsonl``: one row per finished trial, appended and flushed as each one ends, so
+* ``trials.jsonl``: one :class:`~llm_grop.world.contract.TrialRow` per finished trial,
+  appended and flushed as each one ends, so
   an interrupted run loses no finished trial. A rerun skips the trials already there.
   When every trial is done the file is rewritten in ``(task, trial, method)`` order.
 * ``images/``: each trial's final table, the requested objects listed at the top.
@@ -14,6 +15,9 @@ An output directory holds one experiment:
 
 Trial ``k`` of every task uses seed ``seed + k`` for every method, so methods see the same
 scenes and chairs and the comparison is paired.
+
+Worker processes find installed plugins themselves; methods, backends and simulators
+registered at run time are handed to them (:func:`llm_grop.plugins.registered`).
 """
 
 from __future__ import annotations
@@ -29,9 +33,14 @@ from importlib import metadata, resources
 from pathlib import Path
 from typing import Any
 
+from llm_grop import plugins
 from llm_grop.errors import BadInput
-from llm_grop.evaluation.trial import TrialRunner, TrialSettings, TrialSpec
-from llm_grop.world.serialize import write_json
+from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
+from llm_grop.experiment.summary import Summary, summarize, summary_markdown, summary_to_dict
+from llm_grop.experiment.trial import TrialRunner, TrialSettings, TrialSpec
+from llm_grop.world.contract import TrialRow
+from llm_grop.world.jsonio import write_json
+from llm_grop.world.serialize import read_doc
 
 ROWS = "trials.jsonl"
 IDENTITY = "experiment.json"
@@ -58,7 +67,7 @@ class Outcome:
     """What a run of :func:`run_experiment` did: every row in the directory, how many
     trials it ran now and skipped as done, and whether it was interrupted."""
 
-    rows: tuple[dict[str, Any], ...]
+    rows: tuple[TrialRow, ...]
     ran: int
     skipped: int
     interrupted: bool
@@ -86,6 +95,7 @@ def identity(exp: Experiment) -> dict[str, Any]:
         "scene": _digest([s.scene]) if s.scene else "packaged",
         "chairs": s.chairs,
         "w": s.w,
+        "simulator": s.simulator,
         "seed": exp.seed,
         "tasks": hashlib.sha256(tasks).hexdigest()[:16] + (
             "+" + _digest(s.task_files) if s.task_files else ""),
@@ -116,7 +126,7 @@ def prepare_dir(out: Path, exp: Experiment) -> None:
     write_json(marker, mine)
 
 
-def read_rows(out: Path) -> list[dict[str, Any]]:
+def read_rows(out: Path) -> list[TrialRow]:
     """The finished trials' rows; a last line cut off by a crash is dropped."""
     path = out / ROWS
     if not path.exists():
@@ -125,47 +135,55 @@ def read_rows(out: Path) -> list[dict[str, Any]]:
     lines = path.read_text(encoding="utf-8").splitlines()
     for i, line in enumerate(lines):
         try:
-            rows.append(json.loads(line))
+            data = json.loads(line)
         except ValueError:
             if i == len(lines) - 1:
                 break
             raise BadInput(f"{path} line {i + 1}: not a JSON row") from None
+        rows.append(read_doc(TrialRow, data, f"{path} line {i + 1}"))
     return rows
 
 
-def _key(row: dict[str, Any]) -> tuple[str, int, int]:
-    return (row["method"], row["task"], row["trial"])
+def _key(row: TrialRow) -> tuple[str, int, int]:
+    return (row.method, row.task or 0, row.trial)
 
 
-def _sort_key(row: dict[str, Any]) -> tuple[int, int, str]:
-    return (row["task"], row["trial"], row["method"])
+def _sort_key(row: TrialRow) -> tuple[int, int, str]:
+    return (row.task or 0, row.trial, row.method)
+
+
+def _line(row: TrialRow) -> str:
+    return json.dumps(row.to_json(), separators=(",", ":")) + "\n"
 
 
 # Each worker process keeps one runner (one LLM, catalog and scene) for all its trials.
 _RUNNER: TrialRunner | None = None
 
 
-def _init_worker(settings: TrialSettings) -> None:
+def _init_worker(settings: TrialSettings,
+                 registered: dict[str, tuple[str, dict[str, Any]]]) -> None:
     global _RUNNER
     # The parent handles Ctrl-C and stops the workers; they must not die mid-row.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    plugins.restore(registered)
     _RUNNER = TrialRunner(settings)
 
 
-def _work(spec: TrialSpec) -> dict[str, Any]:
+def _work(spec: TrialSpec) -> TrialRow:
     assert _RUNNER is not None
     return _RUNNER(spec)
 
 
 def _results(pending: list[TrialSpec], settings: TrialSettings,
-             workers: int) -> Iterator[dict[str, Any]]:
+             workers: int) -> Iterator[TrialRow]:
     if workers <= 1:
         runner = TrialRunner(settings)
         for spec in pending:
             yield runner(spec)
         return
+    registered = plugins.registered()
     ctx = multiprocessing.get_context("spawn")
-    pool = ctx.Pool(workers, initializer=_init_worker, initargs=(settings,))
+    pool = ctx.Pool(workers, initializer=_init_worker, initargs=(settings, registered))
     try:
         yield from pool.imap_unordered(_work, pending, chunksize=1)
         pool.close()
@@ -176,7 +194,7 @@ def _results(pending: list[TrialSpec], settings: TrialSettings,
 
 def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
                    on_start: Callable[[int, int], None] | None = None,
-                   on_row: Callable[[dict[str, Any]], None] | None = None) -> Outcome:
+                   on_row: Callable[[TrialRow], None] | None = None) -> Outcome:
     """Run the trials of ``exp`` not yet in ``out``; returns every row there.
 
     ``on_start(pending, skipped)`` is called once, ``on_row`` after each finished trial.
@@ -195,7 +213,7 @@ def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
     try:
         with (out / ROWS).open("a", encoding="utf-8") as f:
             for row in _results(pending, exp.settings, workers):
-                f.write(json.dumps(row, separators=(",", ":")) + "\n")
+                f.write(_line(row))
                 f.flush()
                 os.fsync(f.fileno())
                 rows.append(row)
@@ -211,22 +229,19 @@ def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
                    interrupted)
 
 
-def _rewrite(out: Path, rows: list[dict[str, Any]]) -> None:
+def _rewrite(out: Path, rows: list[TrialRow]) -> None:
     """Write ``rows`` as the results file, atomically."""
     tmp = out / f".{ROWS}.tmp"
     with tmp.open("w", encoding="utf-8") as f:
         for row in rows:
-            f.write(json.dumps(row, separators=(",", ":")) + "\n")
+            f.write(_line(row))
         f.flush()
         os.fsync(f.fileno())
     tmp.replace(out / ROWS)
 
 
-def write_reports(out: Path, rows: Sequence[dict[str, Any]]) -> Any:
+def write_reports(out: Path, rows: Sequence[TrialRow]) -> Summary:
     """Write the summary and the paper's two plots from ``rows``; returns the summary."""
-    from llm_grop.evaluation.summary import summarize, summary_markdown, summary_to_dict
-    from llm_grop.render.plots import plot_rating_per_task, plot_rating_vs_time
-
     summary = summarize(rows)
     write_json(out / "summary.json", summary_to_dict(summary))
     (out / "summary.md").write_text(summary_markdown(summary), encoding="utf-8")

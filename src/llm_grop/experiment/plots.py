@@ -21,7 +21,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from llm_grop.errors import BadInput
-from llm_grop.evaluation.summary import Summary
+from llm_grop.experiment.summary import Summary
 from llm_grop.render.table import BACKGROUND, DPI, STYLE, save_png
 
 #: Size (inches) of the rating-vs-time figure (Fig. 3): 900 x 720 pixels at :data:`DPI`.

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from llm_grop.cli import main
-from llm_grop.evaluation.trial import TIMING_FIELDS
+from llm_grop.experiment.trial import TIMING_FIELDS
 
 RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"
 BASE = ["bench", "--tasks", "1", "--trials", "2", "--llm", "replay", "--replay", str(RECORDING),

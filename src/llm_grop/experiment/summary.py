@@ -1,8 +1,8 @@
 """Aggregate benchmark trials into the paper's figures of merit (Sec. IV).
 
-The benchmark writes one JSON row per trial, with at least ``method`` (str), ``task``
-(int), ``success`` (bool), ``rating`` (1-5), ``execution_time_s`` (seconds, ``None``
-when no plan existed), ``planning_time_s`` (seconds, or ``None``) and ``status``.
+The benchmark writes one :class:`~llm_grop.world.contract.TrialRow` per trial: among
+others ``method``, ``task``, ``success``, ``rating`` (1-5), ``execution_time_s`` (seconds,
+``None`` when no plan existed) and ``planning_time_s`` (seconds, or ``None``).
 :func:`summarize` reduces them to means and standard errors per method (Fig. 3: rating
 against execution time) and per method and task (Fig. 5: mean rating per task).
 Standard errors are the sample standard deviation (``n - 1`` in the denominator)
@@ -20,7 +20,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table as RichTable
 
-from llm_grop.errors import BadInput
+from llm_grop.world.contract import TrialRow
+from llm_grop.world.serialize import read_doc
 
 #: The paper's methods, in the order its figures list them; others follow, first seen first.
 PAPER_ORDER = ("tpra", "latp", "grop", "llm-grop")
@@ -115,25 +116,16 @@ class Summary:
         return {(t.method, t.task): (t.rating, t.execution_time_s) for t in self.per_task}
 
 
-@dataclass(frozen=True)
-class _Row:
-    method: str
-    task: int
-    success: bool
-    rating: float | None
-    execution_time_s: float | None
-    planning_time_s: float | None
-
-
-def summarize(rows: Iterable[Mapping[str, Any]]) -> Summary:
-    """Summarize benchmark rows (one per trial) per method and per (method, task).
+def summarize(rows: Iterable[TrialRow | Mapping[str, Any]]) -> Summary:
+    """Summarize trial rows (one per trial) per method and per (method, task).
 
     Methods come in the paper's order (:data:`PAPER_ORDER`) first, then any others in the
-    order first seen; tasks ascending. ``None`` ratings and times are left out of their
-    statistics. Raises :class:`BadInput` (naming the row, counted from 1, and the field)
-    if a row lacks a field or holds a value of the wrong type or range.
+    order first seen; tasks ascending. ``None`` times are left out of their statistics.
+    A row given as a mapping is validated as a :class:`TrialRow`; a malformed one raises
+    :class:`BadInput` naming the row, counted from 1, and the field.
     """
-    parsed = [_parse(row, i) for i, row in enumerate(rows, 1)]
+    parsed = [r if isinstance(r, TrialRow) else read_doc(TrialRow, r, f"benchmark row {i}")
+              for i, r in enumerate(rows, 1)]
     seen: dict[str, None] = {}
     for r in parsed:
         seen.setdefault(r.method, None)
@@ -149,53 +141,11 @@ def summarize(rows: Iterable[Mapping[str, Any]]) -> Summary:
             planning_time_s=stat(r.planning_time_s for r in mine),
             success_rate=stat(r.success for r in mine),
             trials=len(mine)))
-        for task in sorted({r.task for r in mine}):
-            on_task = [r for r in mine if r.task == task]
+        for task in sorted({r.task or 0 for r in mine}):
+            on_task = [r for r in mine if (r.task or 0) == task]
             per_task.append(TaskSummary(name, task, stat(r.rating for r in on_task),
                                         stat(r.execution_time_s for r in on_task)))
     return Summary(tuple(methods), tuple(per_task))
-
-
-def _parse(row: Mapping[str, Any], index: int) -> _Row:
-    where = f"benchmark row {index}"
-    if not isinstance(row, Mapping):
-        raise BadInput(f"{where}: expected an object, got {type(row).__name__}")
-
-    def field(name: str) -> Any:
-        if name not in row:
-            raise BadInput(f"{where}: missing field {name!r}")
-        return row[name]
-
-    method = field("method")
-    if not isinstance(method, str) or not method:
-        raise BadInput(f"{where}: 'method' must be a non-empty string, got {method!r}")
-    task = field("task")
-    if isinstance(task, bool) or not isinstance(task, int):
-        raise BadInput(f"{where}: 'task' must be an integer, got {task!r}")
-    success = field("success")
-    if not isinstance(success, bool):
-        raise BadInput(f"{where}: 'success' must be true or false, got {success!r}")
-    rating = _number(field("rating"), where, "rating")
-    if rating is not None and not 1.0 <= rating <= 5.0:
-        raise BadInput(f"{where}: 'rating' must be between 1 and 5, got {rating:g}")
-    return _Row(method, task, success, rating,
-                _seconds(row.get("execution_time_s"), where, "execution_time_s"),
-                _seconds(row.get("planning_time_s"), where, "planning_time_s"))
-
-
-def _number(value: Any, where: str, name: str) -> float | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise BadInput(f"{where}: {name!r} must be a finite number or null, got {value!r}")
-    return float(value)
-
-
-def _seconds(value: Any, where: str, name: str) -> float | None:
-    x = _number(value, where, name)
-    if x is not None and x < 0:
-        raise BadInput(f"{where}: {name!r} must not be negative, got {x:g}")
-    return x
 
 
 def _stat_dict(s: Stat) -> dict[str, float | int | None]:

@@ -11,7 +11,7 @@ import pytest
 from rich.console import Console
 
 from llm_grop.errors import BadInput
-from llm_grop.evaluation.summary import (
+from llm_grop.experiment.summary import (
     PAPER_ORDER,
     Stat,
     print_summary,
@@ -20,14 +20,12 @@ from llm_grop.evaluation.summary import (
     summary_markdown,
     summary_to_dict,
 )
+from rows import trial_row
 
 
-def row(method: str, task: int, rating: int | None, execution: float | None,
+def row(method: str, task: int, rating: int, execution: float | None,
         planning: float | None = 0.01, success: bool = True, trial: int = 0) -> dict[str, Any]:
-    return {"method": method, "task": task, "trial": trial, "seed": 7 + trial,
-            "success": success, "rating": rating, "execution_time_s": execution,
-            "planning_time_s": planning, "status": "ok" if execution is not None
-            else "infeasible"}
+    return trial_row(method, task, rating, execution, planning, success, trial)
 
 
 ROWS = [
@@ -146,7 +144,7 @@ def test_bad_rows_are_rejected(change: dict[str, Any], message: str) -> None:
 def test_missing_field_is_named() -> None:
     bad = row("grop", 1, 3, 10.0)
     del bad["rating"]
-    with pytest.raises(BadInput, match="row 1: missing field 'rating'"):
+    with pytest.raises(BadInput, match="row 1: rating: Field required"):
         summarize([bad])
 
 

@@ -1,4 +1,6 @@
-"""How long the robot takes to drive a path: the one time model of planner and simulator."""
+"""Driving a path: its length, the turns on the way and how long it takes (room frame,
+metres, radians, seconds). The planner predicts with these and the simulators execute
+with them."""
 
 from __future__ import annotations
 
@@ -37,3 +39,19 @@ def leg_duration_s(start: Pose2D, goal: Pose2D, path: Sequence[tuple[float, floa
 def wrap(angle: float) -> float:
     """``angle`` in radians wrapped to ``[-pi, pi)``."""
     return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def path_prefix(path: Sequence[tuple[float, float]], distance_m: float
+                ) -> tuple[tuple[float, float], ...]:
+    """The first ``distance_m`` metres of ``path``."""
+    out = [path[0]]
+    left = distance_m
+    for a, b in zip(path, path[1:], strict=False):
+        seg = math.dist(a, b)
+        if seg >= left:
+            f = left / seg if seg > 0 else 0.0
+            out.append((a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])))
+            return tuple(out)
+        out.append(b)
+        left -= seg
+    return tuple(out)

@@ -1,0 +1,261 @@
+"""The stable JSON contract as typed models: the arrangement JSON, the run JSON and the bench's
+trial row (``../shared/design/contract.md``).
+
+Every writer builds these models and every reader validates through them, the rater
+included. Their JSON Schemas are generated from them (:func:`json_schema`), committed under
+``docs/schema/`` and printed by ``llm-grop schema NAME``.
+
+The contract only grows: fields are added, never renamed or removed, so every model keeps
+fields it does not know (``extra="allow"``), and a reader of this version accepts a file a
+later version wrote. Optional keys are left out of a document, not written as ``null``,
+unless ``null`` has a meaning of its own (``on``, ``reference``, ``task``).
+
+Units: metres, radians and seconds. Table-frame poses: origin at the table top's centre,
++x to the diner's right, +y away from the diner. Room-frame poses: ``[x, y, theta]`` in
+the dining room's map.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Annotated, Any, Literal
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, Strict
+
+from llm_grop.world.relation import RELATION_NAMES
+from llm_grop.world.scene_file import SceneFile
+
+
+def _not_blank(text: str) -> str:
+    if not text.strip():
+        raise ValueError("expected a non-empty string")
+    return text
+
+
+Num = Annotated[float, Strict(), Field(allow_inf_nan=False)]
+Seconds = Annotated[float, Strict(), Field(ge=0, allow_inf_nan=False)]
+Length = Annotated[float, Strict(), Field(gt=0, allow_inf_nan=False)]
+Int = Annotated[int, Strict()]
+Bool = Annotated[bool, Strict()]
+Text = Annotated[str, Strict()]
+Name = Annotated[str, Strict(), AfterValidator(_not_blank)]
+Size = Annotated[tuple[Length, Length], Field(description="[sx, sy] in metres")]
+RoomPose = Annotated[tuple[Num, Num, Num],
+                     Field(description="room-frame [x, y, theta]: metres, metres, radians")]
+RelationName = Literal[RELATION_NAMES]  # type: ignore[valid-type]
+
+
+class Doc(BaseModel):
+    """A part of a contract document: keeps fields it does not know."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+
+    def to_json(self) -> dict[str, Any]:
+        """The document as JSON values, optional keys that were never set left out."""
+        return self.model_dump(mode="json", exclude_unset=True)
+
+
+class TableDoc(Doc):
+    """The target table's top: ``size`` is ``[width, depth]`` in metres."""
+
+    shape: Literal["rectangle"] = "rectangle"
+    size: Size
+
+
+class ObjectDoc(Doc):
+    """One object on the table, in the table frame.
+
+    llm-grop always writes every field; a reader fills ``shape``, ``size`` and ``height``
+    in from the catalog when another system leaves them out.
+    """
+
+    name: Name = Field(description="unique name: the catalog kind, numbered from the "
+                                   "second of a kind ('dinner fork 2')")
+    x: Num = Field(description="metres, table frame")
+    y: Num = Field(description="metres, table frame")
+    yaw: Num = Field(0.0, description="radians: the object's own frame to the table frame, "
+                                      "counter-clockwise")
+    shape: Literal["circle", "box"] | None = None
+    size: Size | None = Field(None, description="footprint [sx, sy] in metres in the "
+                                                "object's own frame; circles use [d, d]")
+    on: Name | None = Field(None, description="the object this one rests on; null: the table")
+    kind: Name | None = Field(None, description="the catalog kind (default: the name without "
+                                                "a trailing number)")
+    height: Annotated[float, Strict(), Field(ge=0, allow_inf_nan=False)] | None = Field(
+        None, description="metres")
+
+
+class RelationDoc(Doc):
+    """``subject relation reference``; ``reference`` is ``null`` for ``center``. ``line`` (in
+    ``conflicts`` only) is the LLM's text the relation was read from."""
+
+    subject: Name
+    relation: RelationName
+    reference: Name | None
+    line: Text | None = None
+
+
+class LLMCallDoc(Doc):
+    """One logged LLM call: latency in seconds; token counts ``null`` when unknown."""
+
+    prompt: Text
+    response: Text
+    latency_s: Seconds
+    prompt_tokens: Int | None = None
+    completion_tokens: Int | None = None
+    seed: Int | None = None
+
+
+class LLMDoc(Doc):
+    """Which model arranged the objects, how many calls it took, and (``log``) each call."""
+
+    backend: Text
+    model: Text
+    calls: Int
+    log: list[LLMCallDoc] | None = None
+
+
+class ArrangementDoc(Doc):
+    """The arrangement JSON: ``llm-grop arrange --json``, and ``final``/``planned`` in a run."""
+
+    model_config = ConfigDict(title="llm-grop arrangement JSON")
+
+    request: Text = ""
+    table: TableDoc
+    objects: list[ObjectDoc]
+    relations: list[RelationDoc] = Field(
+        [], description="the consistent symbolic relations the arrangement satisfies")
+    llm: LLMDoc | None = None
+    warnings: list[Text] = Field([], description="what the pipeline dropped or assumed")
+    conflicts: list[list[RelationDoc]] = Field(
+        [], description="per rejected LLM answer, the minimal set of conflicting lines")
+
+
+class StepDoc(Doc):
+    """One executed action (an attempt; failed attempts are kept, ``ok`` false, with a
+    ``note``). ``pose`` is where a placed object landed (table frame ``[x, y, yaw]``) or,
+    for ``pick``, the object's start (room frame ``[x, y, 0]``)."""
+
+    action: Literal["navigate", "pick", "place"]
+    object: Text | None = None
+    goal: RoomPose | None = None
+    standing: RoomPose | None = None
+    pose: tuple[Num, Num, Num] | None = None
+    duration_s: Seconds
+    ok: Bool
+    attempt: Int = 1
+    note: Text | None = None
+    path: list[tuple[Num, Num]] | None = Field(None, description="the driven path, room "
+                                                                 "frame, metres")
+
+
+class StandingDoc(Doc):
+    """Where the plan has the robot stand to place ``object``."""
+
+    object: Name
+    pose: RoomPose
+
+
+class PlanDoc(Doc):
+    """The chosen task-motion plan: expected utility and costs in seconds."""
+
+    order: list[Name]
+    standing: list[StandingDoc]
+    configuration_index: Int = Field(description="which of the M configurations, from 0")
+    configurations: Int = Field(description="M, how many configurations were planned for")
+    expected_utility: Num
+    feasibility: Num = Field(description="probability that every action succeeds at once")
+    expected_cost_s: Num
+    expected_duration_s: Num
+
+
+class RunDoc(Doc):
+    """The run JSON: ``llm-grop run --json``."""
+
+    model_config = ConfigDict(title="llm-grop run JSON")
+
+    method: Name
+    task: Int | None = Field(description="the task id, or null for a free request")
+    seed: Int
+    request: Text
+    success: Bool = Field(description="every requested object reached the table")
+    execution_time_s: Seconds = Field(description="simulated seconds")
+    planning_time_s: Seconds = Field(description="wall-clock seconds, LLM calls excluded")
+    failures: Int = Field(description="failed action attempts")
+    unplaced: list[Name]
+    steps: list[StepDoc]
+    final: ArrangementDoc = Field(description="where the objects really ended up")
+    plan: PlanDoc
+    planned: ArrangementDoc = Field(description="the arrangement the plan realises")
+    simulator: Name = Field(description="the simulator that executed the plan")
+    scene: SceneFile = Field(description="the episode's room, with its sampled chairs and "
+                                         "object starts, in the scene file's layout")
+
+
+class CheckDoc(Doc):
+    """One check of the automatic rater."""
+
+    name: Name
+    passed: Bool
+    severity: Literal["missing", "major", "minor"]
+    detail: Text
+    skipped: Bool = False
+
+
+class RatingDoc(Doc):
+    """The automatic rater's 1-5 score (paper Table III), with every check behind it."""
+
+    score: Annotated[int, Strict(), Field(ge=1, le=5)]
+    summary: Text
+    checks: list[CheckDoc]
+
+
+class TrialRow(RunDoc):
+    """One line of a bench's ``trials.jsonl``: the run JSON of one trial (without the LLM
+    call log) plus its rating. A trial without a plan has ``status`` ``infeasible``, a
+    ``reason``, nothing on the table, and no ``plan``, ``planned`` or ``scene``."""
+
+    model_config = ConfigDict(title="llm-grop bench trial row")
+
+    execution_time_s: Seconds | None = Field(description="simulated seconds; null without "
+                                                         "a plan")
+    planning_time_s: Seconds | None = Field(description="wall-clock seconds; null without "
+                                                        "a plan")
+    plan: PlanDoc | None = None
+    planned: ArrangementDoc | None = None
+    scene: SceneFile | None = None
+    simulator: Name | None = Field(None, description="the simulator that executed the plan; "
+                                                     "absent in rows written before 0.2")
+    status: Literal["ok", "infeasible"]
+    reason: Text | None = None
+    trial: Int
+    retries: Int = Field(description="actions that needed more than one attempt")
+    llm_calls: Int
+    llm_prompt_tokens: Int
+    llm_completion_tokens: Int
+    llm_time_s: Seconds = Field(description="wall-clock seconds waiting for the LLM")
+    rating: Annotated[int, Strict(), Field(ge=1, le=5)]
+    rating_explanation: RatingDoc
+    image: Text | None = Field(None, description="the final table's picture, relative to "
+                                                 "the results directory")
+
+
+#: The published documents, by the name ``llm-grop schema`` takes.
+DOCUMENTS: dict[str, type[Doc]] = {
+    "arrangement": ArrangementDoc,
+    "run": RunDoc,
+    "trial": TrialRow,
+}
+
+
+def json_schema(name: str) -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of the document called ``name``."""
+    model = DOCUMENTS[name]
+    schema = model.model_json_schema(mode="validation")
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema",
+            "$id": f"https://llm-grop.dev/schema/{name}.schema.json", **schema}
+
+
+def schema_text(name: str) -> str:
+    """:func:`json_schema` as the text committed under ``docs/schema/``."""
+    return json.dumps(json_schema(name), indent=2, ensure_ascii=False) + "\n"
