@@ -27,6 +27,7 @@ from dataclasses import replace
 import numpy as np
 from common import replay_llm
 
+from llm_grop import seeds
 from llm_grop.api import resolve_items, run
 from llm_grop.planning.grop import Candidate, build_plan, evaluate
 from llm_grop.planning.navigation import Navigator
@@ -81,8 +82,8 @@ def simulate(plan: Plan, ctx: PlanningContext, nav: Navigator, runs: int) -> flo
     """Mean simulated execution time of ``plan`` over ``runs`` seeds, seconds."""
     sim = Kinematic2D()
     return statistics.fmean(
-        sim.execute(plan, ctx.scene, np.random.default_rng([seed, 99]), replan=nav,
-                    model=ctx.model).execution_time_s for seed in range(runs))
+        sim.execute(plan, ctx.scene, seeds.stream(seed, "simulator"), replan=nav
+                    ).execution_time_s for seed in range(runs))
 
 
 def main() -> None:

@@ -98,6 +98,9 @@ def test_object_out_of_every_reach(tmp_path: Path, capsys) -> None:
     (["run"], "give a REQUEST or --task N"),
     (["run", REQUEST, "--method", "magic"], "unknown method 'magic'"),
     (["run", REQUEST, "--scene", "/nonexistent/scene.yaml"], "scene.yaml"),
+    (["run", REQUEST, "--simulator", "gazebo"],
+     "--simulator: unknown simulator 'gazebo' (available: kinematic2d"),
+    (["run", REQUEST, "--llm", "claude"], "--llm: unknown backend 'claude' (available: embedded"),
 ])
 def test_bad_flags(capsys, args: list[str], needle: str) -> None:
     assert main(args) == 2

@@ -54,7 +54,9 @@ def imported_modules(path: Path, root: Path) -> list[str]:
             if node.level:
                 parent = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
                 base = f"{parent}.{base}" if base else parent
-            out += [base] + [f"{base}.{a.name}" for a in node.names]
+            # `from llm_grop import seeds` imports the module, not the package's facade.
+            out += ([] if base == "llm_grop" else [base]) + [f"{base}.{a.name}"
+                                                              for a in node.names]
         elif isinstance(node, ast.Call) and node.args \
                 and isinstance(node.args[0], ast.Constant) \
                 and getattr(node.func, "attr", getattr(node.func, "id", "")) in (

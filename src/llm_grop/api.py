@@ -90,10 +90,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     replaces the paper's Table I for ``task``. The same seed gives the same run.
     """
     # Planning pulls in OMPL and scipy; import them only when a run needs them.
-    import numpy as np
-
     from llm_grop.methods.base import EpisodeInput
-    from llm_grop.methods.episode import STAGE_SCENE, run_episode
+    from llm_grop.methods.episode import run_episode
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.simulation.scenario import prepare_episode
     from llm_grop.world.scene_file import load_scene
@@ -111,8 +109,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
                            f"did you mean {', '.join(map(repr, catalog.suggest(kind))) or '?'}")
     if chairs is None and not (base.chairs or base.chairs_listed):
         chairs = 1
-    episode = prepare_episode(base, items, np.random.default_rng([seed, STAGE_SCENE]),
-                              chairs=chairs)
+    episode = prepare_episode(base, items, seed, chairs=chairs)
     log = None
     if chosen.uses_llm:
         log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)

@@ -5,10 +5,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import jsonschema
 import pytest
 
 from llm_grop.cli import main
 from llm_grop.experiment.trial import TIMING_FIELDS
+from llm_grop.world.contract import json_schema
 
 RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"
 BASE = ["bench", "--tasks", "1", "--trials", "2", "--llm", "replay", "--replay", str(RECORDING),
@@ -44,7 +46,10 @@ def test_two_trial_bench_runs_end_to_end(finished: Path) -> None:
     keys = [(r["task"], r["trial"], r["method"]) for r in rows]
     assert keys == sorted(keys) and len(keys) == 8
     assert {r["method"] for r in rows} == {"tpra", "latp", "grop", "llm-grop"}
+    validator = jsonschema.Draft202012Validator(json_schema("trial"))
     for r in rows:
+        validator.validate(r)
+        assert r["simulator"] == "kinematic2d"
         assert {"method", "task", "seed", "success", "execution_time_s", "planning_time_s",
                 "final", "rating", "rating_explanation", "llm_calls", "retries"} <= r.keys()
         assert 1 <= r["rating"] <= 5
@@ -105,6 +110,8 @@ def test_non_empty_directory_is_refused(tmp_path: Path, capsys) -> None:
     (["--tasks", "dinner"], "no task is tagged 'dinner'"),
     (["--tasks", "3-1"], "'3-1' is an empty range"),
     (["--seed", "-1"], "--seed"),
+    (["--simulator", "gazebo"], "--simulator: unknown simulator 'gazebo'"),
+    (["--llm", "claude"], "--llm: unknown backend 'claude'"),
     (["--prefer", "the dinner fork to the left of the dinner plate",
       "--prefer", "the dinner plate to the left of the dinner fork"],
      "task 1: preferences contradict each other"),

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import json
 
+import jsonschema
 import pytest
 
 from llm_grop.api import make_llm, run
 from llm_grop.errors import BadInput
 from llm_grop.llm.base import BackendOptions
 from llm_grop.methods.registry import available_methods, get_method
+from llm_grop.world.contract import json_schema
 from llm_grop.world.jsonio import dumps
 from llm_grop.world.run_json import run_to_dict
 from scripted import TASK1_GOOD, scripted
@@ -43,6 +45,7 @@ def test_method_contract(chat_server, method: str) -> None:
     first = _run(chat_server, method, seed=3)
     again = _run(chat_server, method, seed=3)
     assert _without_wall_times(first) == _without_wall_times(again)
+    jsonschema.Draft202012Validator(json_schema("run")).validate(first)
     assert first["method"] == method and first["seed"] == 3
     assert isinstance(first["success"], bool)
     assert first["execution_time_s"] > 0 and first["planning_time_s"] >= 0

@@ -7,11 +7,11 @@ request items -> Template 1 -> parsed relations (+ follow-ups for left-out objec
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
-import numpy as np
-
+from llm_grop import seeds
 from llm_grop.arrangement import (
     consistency,
     distances,
@@ -28,8 +28,7 @@ from llm_grop.world.llmlog import LLMSummary
 from llm_grop.world.relation import CENTER, STACKING, Relation
 from llm_grop.world.table import Table
 
-#: Stage numbers mixed into per-call seeds, so each call of a run has its own seed.
-_STAGE_RELATIONS, _STAGE_FOLLOWUP, _STAGE_DISTANCE = 1, 2, 3
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -87,11 +86,6 @@ class ArrangementResult:
     gaps_m: dict[tuple[str, str, str | None], float]
 
 
-def call_seed(seed: int, *path: int) -> int:
-    """A per-call LLM seed derived from the run's ``seed`` and the call's position."""
-    return int(np.random.SeedSequence([seed, *path]).generate_state(1)[0] & 0x7FFFFFFF)
-
-
 def _dedupe(rels: Sequence[Relation]) -> list[Relation]:
     """Drops repeats of a fact, also when restated as its converse."""
     seen: set[tuple[str, str, str | None]] = set()
@@ -119,7 +113,7 @@ def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: 
                    attempt: int, options: ArrangeOptions) -> Attempt:
     kwargs = {} if options.examples is None else {"examples": options.examples}
     prompt = relations.template1_prompt(items, notes=options.notes, **kwargs)
-    s = call_seed(seed, _STAGE_RELATIONS, attempt)
+    s = seeds.int_seed(seed, "llm.relations", attempt)
     temperature = min(1.0, options.params.temperature + attempt * options.reprompt_temperature_step)
     params = replace(options.params, seed=s, temperature=max(temperature,
                                                                options.params.temperature))
@@ -132,7 +126,7 @@ def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: 
             anchor = _anchor_for(missing, items, found)
             record = llm.complete(
                 relations.followup_prompt(missing, anchor),
-                options.params.with_seed(call_seed(seed, _STAGE_FOLLOWUP, attempt, k)),
+                options.params.with_seed(seeds.int_seed(seed, "llm.followup", attempt, k)),
                 relations.followup_grammar(missing, anchor))
             answer = relations.parse_relations(record.response, items, catalog)
             found += [r for r in answer.relations if missing in (r.subject, r.reference)]
@@ -163,7 +157,11 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
     relation and :class:`~llm_grop.errors.Infeasible` when no configuration fits.
     """
     options = options or ArrangeOptions()
-    say = on_event or (lambda _msg: None)
+    def say(message: str) -> None:
+        log.info(message)
+        if on_event is not None:
+            on_event(message)
+
     first_call = len(llm.calls)
     warnings: list[str] = []
     attempts: list[Attempt] = []
@@ -179,6 +177,9 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
                 f"(attempt {k + 1}/{options.max_attempts})")
             attempt = _ask_relations(items, llm, catalog, seed, k, options)
             attempts.append(attempt)
+            if attempt.conflict:
+                log.info("attempt %d conflicts: %s", k + 1,
+                         "; ".join(r.line or r.sentence() for r in attempt.conflict))
             if attempt.consistent:
                 accepted = attempt.relations
                 break
@@ -209,7 +210,7 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
             continue
         say(f"asking {llm.model} for the distance: {rel.sentence()}")
         record = llm.complete(distances.template2_prompt(rel),
-                              options.params.with_seed(call_seed(seed, _STAGE_DISTANCE, k)),
+                              options.params.with_seed(seeds.int_seed(seed, "llm.distance", k)),
                               distances.template2_grammar())
         gaps[rel.key()], defaulted = distances.parse_distance_m(record.response)
         if defaulted:
@@ -219,7 +220,7 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
     say("sampling configurations")
     layout = geometry.guided_layout(items, accepted, gaps, table)
     configs = sampling.sample_configurations(items, layout, accepted, table,
-                                             np.random.default_rng(seed), m=options.m)
+                                             seeds.stream(seed, "sampler"), m=options.m)
     arrangement = Arrangement(
         request=request, table=table, placements=configs[0].placements, relations=accepted,
         llm=LLMSummary(llm.backend, llm.model, tuple(llm.calls[first_call:])),

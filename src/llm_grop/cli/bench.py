@@ -119,6 +119,7 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     from llm_grop.experiment.runner import Experiment, run_experiment, write_reports
     from llm_grop.experiment.summary import print_summary
     from llm_grop.experiment.trial import TrialSettings
+    from llm_grop.llm.registry import BACKENDS
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.world.contract import TrialRow
     from llm_grop.world.scene_file import load_scene
@@ -128,7 +129,9 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     tasks = parse_tasks(tasks_text, known)
     methods = parse_methods(methods_text)
     llm_options, options = llm_settings(**flags)
-    create_simulator(simulator)  # an unknown simulator is reported before any trial runs
+    # Unknown or broken components are reported before any trial runs.
+    create_simulator(simulator)
+    BACKENDS.get(flags["backend"])
     if scene_path is not None:
         load_scene(scene_path)  # a bad scene is reported before any trial runs
     _check_tasks(tasks, known, options, catalog_files)

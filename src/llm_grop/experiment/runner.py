@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import multiprocessing
 import os
 import signal
@@ -41,6 +42,8 @@ from llm_grop.experiment.trial import TrialRunner, TrialSettings, TrialSpec
 from llm_grop.world.contract import TrialRow
 from llm_grop.world.jsonio import write_json
 from llm_grop.world.serialize import read_doc
+
+log = logging.getLogger(__name__)
 
 ROWS = "trials.jsonl"
 IDENTITY = "experiment.json"
@@ -96,12 +99,26 @@ def identity(exp: Experiment) -> dict[str, Any]:
         "chairs": s.chairs,
         "w": s.w,
         "simulator": s.simulator,
+        "plugins": _plugin_origins(exp),
         "seed": exp.seed,
         "tasks": hashlib.sha256(tasks).hexdigest()[:16] + (
             "+" + _digest(s.task_files) if s.task_files else ""),
         "catalog": hashlib.sha256(catalog).hexdigest()[:16] + (
             "+" + _digest(s.catalog_files) if s.catalog_files else ""),
     }
+
+
+def _plugin_origins(exp: Experiment) -> dict[str, str]:
+    """Where each component the experiment uses comes from, when llm-grop does not ship it
+    (a plugin's version decides its results as llm-grop's own version does)."""
+    from llm_grop.llm.registry import BACKENDS
+    from llm_grop.methods.registry import METHODS
+    from llm_grop.simulation.registry import SIMULATORS
+
+    used = [(BACKENDS, exp.settings.backend), (SIMULATORS, exp.settings.simulator),
+            *((METHODS, m) for m in exp.methods)]
+    origins = {f"{reg.kind} {name}": reg.origin(name) for reg, name in used}
+    return {k: v for k, v in origins.items() if v != "llm-grop"}
 
 
 def prepare_dir(out: Path, exp: Experiment) -> None:
@@ -160,9 +177,13 @@ def _line(row: TrialRow) -> str:
 _RUNNER: TrialRunner | None = None
 
 
-def _init_worker(settings: TrialSettings,
-                 registered: dict[str, tuple[str, dict[str, Any]]]) -> None:
+def _init_worker(settings: TrialSettings, registered: dict[str, tuple[str, dict[str, Any]]],
+                 log_level: int) -> None:
     global _RUNNER
+    if log_level < logging.WARNING:
+        logging.basicConfig(format="llm-grop: worker %(process)d: %(levelname)s: %(name)s: "
+                            "%(message)s")
+        logging.getLogger("llm_grop").setLevel(log_level)
     # The parent handles Ctrl-C and stops the workers; they must not die mid-row.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     plugins.restore(registered)
@@ -174,16 +195,16 @@ def _work(spec: TrialSpec) -> TrialRow:
     return _RUNNER(spec)
 
 
-def _results(pending: list[TrialSpec], settings: TrialSettings,
-             workers: int) -> Iterator[TrialRow]:
+def _results(pending: list[TrialSpec], settings: TrialSettings, workers: int,
+             registered: dict[str, tuple[str, dict[str, Any]]]) -> Iterator[TrialRow]:
     if workers <= 1:
         runner = TrialRunner(settings)
         for spec in pending:
             yield runner(spec)
         return
-    registered = plugins.registered()
     ctx = multiprocessing.get_context("spawn")
-    pool = ctx.Pool(workers, initializer=_init_worker, initargs=(settings, registered))
+    pool = ctx.Pool(workers, initializer=_init_worker,
+                    initargs=(settings, registered, log.getEffectiveLevel()))
     try:
         yield from pool.imap_unordered(_work, pending, chunksize=1)
         pool.close()
@@ -199,6 +220,8 @@ def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
 
     ``on_start(pending, skipped)`` is called once, ``on_row`` after each finished trial.
     """
+    # Checked before the directory is made: an entry that cannot reach workers fails now.
+    registered = plugins.registered() if workers > 1 else {}
     prepare_dir(out, exp)
     if exp.settings.images is not None:
         Path(exp.settings.images).mkdir(parents=True, exist_ok=True)
@@ -212,11 +235,13 @@ def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
     _rewrite(out, rows)  # drops a cut-off last line before appending
     try:
         with (out / ROWS).open("a", encoding="utf-8") as f:
-            for row in _results(pending, exp.settings, workers):
+            for row in _results(pending, exp.settings, workers, registered):
                 f.write(_line(row))
                 f.flush()
                 os.fsync(f.fileno())
                 rows.append(row)
+                log.info("task %s trial %d %s: rating %d, %s", row.task, row.trial, row.method,
+                         row.rating, "success" if row.success else row.status)
                 ran += 1
                 if on_row is not None:
                     on_row(row)

@@ -20,8 +20,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
-import numpy as np
-
+from llm_grop import seeds
 from llm_grop.arrangement.pipeline import ArrangeOptions, arrange_items
 from llm_grop.arrangement.random_placement import random_configurations
 from llm_grop.errors import BadInput
@@ -96,7 +95,7 @@ class ComposedMethod:
             llm_s = inp.llm.wall_s - before
             return Proposal(result.arrangement, result.configurations,
                             max(time.perf_counter() - t0 - llm_s, 0.0))
-        rng = np.random.default_rng([inp.seed, 4])
+        rng = seeds.stream(inp.seed, "random_arrangement")
         configs = random_configurations(inp.items, inp.table, rng, m=inp.options.m)
         arrangement = Arrangement(inp.request, inp.table, configs[0].placements)
         return Proposal(arrangement, configs, time.perf_counter() - t0)

@@ -1,16 +1,16 @@
 """One episode: a method's arrangement, the task-motion plan, and its simulated execution.
 
-Random streams are separate per stage (``default_rng([seed, stage])``), so every method
-run on the same seed sees the same scene and chairs, and the comparison is paired.
+Random streams are separate per stage (:mod:`llm_grop.seeds`), so every method run on the
+same seed sees the same scene and chairs, and the comparison is paired.
 """
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import replace
 
-import numpy as np
-
+from llm_grop import seeds
 from llm_grop.arrangement.sampling import violations
 from llm_grop.methods.base import EpisodeInput, Method
 from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY, FeasibilityModel
@@ -23,8 +23,7 @@ from llm_grop.world.plan import Execution, RunResult
 from llm_grop.world.relation import Relation
 from llm_grop.world.scene import Scene
 
-#: Stage numbers of the per-episode random streams.
-STAGE_SCENE, STAGE_PLAN, STAGE_SIMULATION = 1, 2, 3
+log = logging.getLogger(__name__)
 
 
 def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | None,
@@ -38,20 +37,25 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     Planning time counts the arrangement's computation without LLM calls, GROP and the
     OMPL paths. Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
     """
-    say = inp.on_event or (lambda _msg: None)
+    def say(message: str) -> None:
+        log.info(message)
+        if inp.on_event is not None:
+            inp.on_event(message)
+
     proposal = method.propose(inp)
     say(f"planning for {len(proposal.configurations)} configuration(s)")
     t0 = time.perf_counter()
     ctx = PlanningContext(scene, inp.items, model, planner)
     cand = choose(ctx, proposal.configurations, method.standing,
-                  np.random.default_rng([inp.seed, STAGE_PLAN]), method.best_of_all)
+                  seeds.stream(inp.seed, "standing"), method.best_of_all)
     navigator = Navigator(scene, scene.robot.base_radius_m,
                           time_limit_s=ctx.options.path_time_limit_s)
     plan = build_plan(ctx, cand, navigator, inp.seed, len(proposal.configurations))
     planning_s = proposal.compute_time_s + time.perf_counter() - t0
-    say("executing the plan")
+    say(f"executing the plan (configuration {plan.configuration_index + 1}, expected "
+        f"utility {plan.utility:.1f} s) with {simulator.name}")
     execution = simulator.execute(plan, scene,
-                                  np.random.default_rng([inp.seed, STAGE_SIMULATION]),
+                                  seeds.stream(inp.seed, "simulator"),
                                   replan=navigator)
     planned = replace(proposal.arrangement, placements=plan.configuration)
     return RunResult(method=method.name, task=task, seed=inp.seed, request=inp.request,

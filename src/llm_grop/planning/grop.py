@@ -10,12 +10,14 @@ shares all of this except the standing choice.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
+from llm_grop import seeds
 from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import leg_duration_s
 from llm_grop.planning.navigation import Navigator
@@ -25,6 +27,8 @@ from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import Plan, Step
+
+log = logging.getLogger(__name__)
 
 StandingPolicy = Literal["utility", "uniform"]
 
@@ -148,8 +152,11 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
     for i, config in enumerate(configs):
         cand = evaluate(ctx, config, i, policy, rng, node_budget=0 if large else NODE_BUDGET)
         if isinstance(cand, str):
+            log.debug("configuration %d: no plan: %s", i + 1, cand)
             reasons.append(cand)
             continue
+        log.debug("configuration %d: utility %.1f s, feasibility %.2f", i + 1, cand.utility,
+                  cand.feasibility)
         found.append(cand)
         if not best_of_all:
             break
@@ -205,7 +212,8 @@ def _steps(ctx: PlanningContext, cand: Candidate, trips: Sequence[tuple[int, ...
     def go(goal: Pose2D, obj: str, alternatives: tuple[Pose2D, ...], p: float) -> Pose2D:
         nonlocal here, leg
         for g in (goal, *alternatives):
-            path = navigator.plan((here.x, here.y), (g.x, g.y), seed=seed * 1000 + leg)
+            path = navigator.plan((here.x, here.y), (g.x, g.y),
+                                  seed=seeds.int_seed(seed, "ompl", leg))
             if path is not None:
                 leg += 1
                 steps.append(Step("navigate", obj, goal=g, path=path, success_p=p,

@@ -15,6 +15,7 @@ uncertainty as a black box, as in the paper).
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field
 
@@ -28,6 +29,8 @@ from llm_grop.world.arrangement import Placement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point, Step
 from llm_grop.world.scene import Scene
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -184,6 +187,8 @@ class _Run:
                          t.size, on, t.kind, t.height)
 
     def _record(self, step: ExecutedStep) -> None:
+        log.debug("%s %s: %s (%.1f s)", step.action, step.object or "",
+                  "ok" if step.ok else f"failed, {step.note}", step.duration_s)
         self.out.append(step)
         self.time_s += step.duration_s
 

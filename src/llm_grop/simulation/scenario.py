@@ -1,10 +1,10 @@
 """Setting up an episode: where each requested object starts and which chairs stand around
 the target table (room frame, metres and radians).
 
-Everything is drawn from the generator it is given, so a seed fixes the episode; drawn
+Everything is drawn from the seed's own random streams, so a seed fixes the episode; drawn
 positions are rounded to 0.1 mm, so the run JSON's scene reads back as the same scene. Chairs
-are drawn before the objects' starts, so the same seed gives the same chairs whatever is
-requested (methods compared on a seed see the same room).
+and objects' starts have generators of their own, so the same seed gives the same chairs
+whatever is requested (methods compared on a seed see the same room).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import numpy as np
 from shapely.geometry import Point, Polygon
 from shapely.geometry import box as rect
 
+from llm_grop import seeds
 from llm_grop.errors import BadInput, Infeasible
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Box
@@ -39,10 +40,11 @@ TRIES = 200
 RESTARTS = 20
 
 
-def prepare_episode(scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
+def prepare_episode(scene: Scene, items: Sequence[Item], seed: int, *,
                     chairs: int | None = None,
                     chair_size_m: tuple[float, float] = (0.45, 0.45)) -> Scene:
-    """``scene`` set up for one episode with ``items``.
+    """``scene`` set up for the episode seeded ``seed`` with ``items``: chairs from the
+    ``chairs`` random stream, object starts from the ``scene`` stream (:mod:`llm_grop.seeds`).
 
     Every item gets one source: its own or its kind's from the scene (a kind's source
     goes to the first item of that kind only), else a random spot on a supply table, the
@@ -57,8 +59,9 @@ def prepare_episode(scene: Scene, items: Sequence[Item], rng: np.random.Generato
     if chairs is not None:
         if chairs < 0:
             raise BadInput(f"chairs: must not be negative, got {chairs}")
-        scene = scene.with_chairs(_sample_chairs(scene, chairs, chair_size_m, rng))
-    return scene.with_sources(_assign_sources(scene, items, rng))
+        scene = scene.with_chairs(_sample_chairs(scene, chairs, chair_size_m,
+                                                 seeds.stream(seed, "chairs")))
+    return scene.with_sources(_assign_sources(scene, items, seeds.stream(seed, "scene")))
 
 
 def _sample_chairs(scene: Scene, n: int, size: tuple[float, float],

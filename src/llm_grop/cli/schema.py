@@ -1,0 +1,19 @@
+"""``llm-grop schema``: the JSON Schema of one of the contract's documents."""
+
+from __future__ import annotations
+
+import click
+
+from llm_grop.cli.options import EPILOG
+from llm_grop.world.contract import DOCUMENTS, schema_text
+
+
+@click.command(epilog=EPILOG)
+@click.argument("name", type=click.Choice(sorted(DOCUMENTS)))
+def schema(name: str) -> None:
+    """Print the JSON Schema of the arrangement JSON, the run JSON or a bench trial row.
+
+    The same files are in docs/schema/ of the source tree; validate a file with any JSON
+    Schema tool, e.g. `check-jsonschema --schemafile run.schema.json run.json`.
+    """
+    click.echo(schema_text(name), nl=False)
