@@ -58,6 +58,8 @@ class Registry(Generic[T]):
         flag: the command-line flag that chooses one (``--method``).
         module: the module that defines this registry (imported again in workers).
         builtins: what llm-grop ships: name -> ``"module:attribute"``, loaded on first use.
+        factory: for kinds whose entries are factories, their signature (``() -> Simulator``);
+            an entry that is not callable is refused.
         check: raises :class:`BadInput` when a loaded object is not a valid entry; it gets
             the entry's name, the object and where it came from.
     """
@@ -67,6 +69,7 @@ class Registry(Generic[T]):
     flag: str
     module: str
     builtins: Mapping[str, str]
+    factory: str | None = None
     check: Callable[[str, Any, str], None] | None = None
     _runtime: dict[str, Any] = field(default_factory=dict)
     _loaded: dict[str, Any] = field(default_factory=dict)
@@ -80,8 +83,7 @@ class Registry(Generic[T]):
         key = _normal(name)
         if not key:
             raise BadInput(f"{self.flag}: a {self.kind} needs a non-empty name")
-        if self.check is not None:
-            self.check(key, entry, "registered at run time")
+        self._validate(key, entry, "registered at run time")
         self._runtime[key] = entry
         self._loaded.pop(key, None)
         log.debug("registered %s %r at run time", self.kind, key)
@@ -148,11 +150,17 @@ class Registry(Generic[T]):
             except Exception as exc:  # noqa: BLE001 - a plugin's failure is the user's input
                 raise BadInput(f"{self.flag}: plugin {key!r} from {_dist(ep)} failed to load "
                                f"({ep.value}): {type(exc).__name__}: {exc}") from None
-            if self.check is not None:
-                self.check(key, obj, f"plugin {_dist(ep)}")
+            self._validate(key, obj, f"plugin {_dist(ep)}")
             log.debug("loaded %s %r from %s", self.kind, key, _dist(ep))
         self._loaded[key] = obj
         return obj  # type: ignore[no-any-return]
+
+    def _validate(self, name: str, obj: Any, origin: str) -> None:
+        if self.factory is not None and not callable(obj):
+            raise BadInput(f"{self.flag}: {origin}: {self.kind} {name!r} is not a factory "
+                           f"{self.factory}")
+        if self.check is not None:
+            self.check(name, obj, origin)
 
     def _unknown(self, name: str) -> BadInput:
         return BadInput(f"{self.flag}: unknown {self.kind} {name!r} "

@@ -39,6 +39,9 @@ from llm_grop.errors import BadInput
 from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
 from llm_grop.experiment.summary import Summary, summarize, summary_markdown, summary_to_dict
 from llm_grop.experiment.trial import TrialRunner, TrialSettings, TrialSpec
+from llm_grop.llm.registry import BACKENDS
+from llm_grop.methods.registry import METHODS
+from llm_grop.simulation.registry import SIMULATORS
 from llm_grop.world.contract import TrialRow
 from llm_grop.world.jsonio import write_json
 from llm_grop.world.serialize import read_doc
@@ -111,10 +114,6 @@ def identity(exp: Experiment) -> dict[str, Any]:
 def _plugin_origins(exp: Experiment) -> dict[str, str]:
     """Where each component the experiment uses comes from, when llm-grop does not ship it
     (a plugin's version decides its results as llm-grop's own version does)."""
-    from llm_grop.llm.registry import BACKENDS
-    from llm_grop.methods.registry import METHODS
-    from llm_grop.simulation.registry import SIMULATORS
-
     used = [(BACKENDS, exp.settings.backend), (SIMULATORS, exp.settings.simulator),
             *((METHODS, m) for m in exp.methods)]
     origins = {f"{reg.kind} {name}": reg.origin(name) for reg, name in used}

@@ -98,12 +98,12 @@ class TrialRunner:
     def __call__(self, spec: TrialSpec) -> TrialRow:
         """The trial's row."""
         task = self.tasks[spec.task]
-        log_ = self.llm() if get_method(spec.method).uses_llm else None
+        llm_log = self.llm() if get_method(spec.method).uses_llm else None
         episode: dict[str, Any]
         try:
             result = run(task=spec.task, tasks=self.tasks, method=spec.method, scene=self.scene,
                          chairs=self.settings.chairs, seed=spec.seed,
-                         llm=log_ if log_ is not None else "replay", catalog=self.catalog,
+                         llm=llm_log if llm_log is not None else "replay", catalog=self.catalog,
                          options=self.settings.arrange, planner=GropOptions(w=self.settings.w),
                          simulator=self.settings.simulator)
         except Infeasible as exc:
@@ -122,7 +122,7 @@ class TrialRunner:
             doc = run_doc(result, llm_log=False)
             episode = {k: getattr(doc, k) for k in doc.model_fields_set} | {
                 "status": "ok", "retries": sum(s.attempt > 1 for s in result.execution.steps)}
-        calls = log_.calls if log_ else []
+        calls = llm_log.calls if llm_log else []
         rating = rate(episode["final"], requested=list(task.objects), catalog=self.catalog)
         extra: dict[str, Any] = {}
         if self.settings.images is not None:
@@ -131,7 +131,7 @@ class TrialRunner:
             **episode, trial=spec.trial, llm_calls=len(calls),
             llm_prompt_tokens=sum(c.prompt_tokens or 0 for c in calls),
             llm_completion_tokens=sum(c.completion_tokens or 0 for c in calls),
-            llm_time_s=round(log_.wall_s, 4) if log_ else 0.0,
+            llm_time_s=round(llm_log.wall_s, 4) if llm_log else 0.0,
             rating=rating.score, rating_explanation=rating.doc(), **extra)
 
     def _draw(self, spec: TrialSpec, task: Task, final: Arrangement) -> str:

@@ -4,19 +4,11 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
-from llm_grop.errors import BadInput
 from llm_grop.llm.base import LLM, BackendOptions
 from llm_grop.plugins import Registry
 
 Factory = Callable[[BackendOptions], LLM]
-
-
-def _check(name: str, obj: Any, origin: str) -> None:
-    if not callable(obj):
-        raise BadInput(f"--llm: {origin}: backend {name!r} is not a factory "
-                       "(BackendOptions) -> LLM")
 
 
 BACKENDS: Registry[Factory] = Registry(
@@ -24,7 +16,7 @@ BACKENDS: Registry[Factory] = Registry(
     builtins={"embedded": "llm_grop.llm.embedded:EmbeddedLLM",
               "openai": "llm_grop.llm.openai_backend:OpenAILLM",
               "replay": "llm_grop.llm.replay:ReplayLLM"},
-    check=_check)
+    factory="(BackendOptions) -> LLM")
 
 
 def register_backend(name: str, factory: Factory) -> None:

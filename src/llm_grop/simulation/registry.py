@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 from llm_grop.errors import BadInput
 from llm_grop.plugins import Registry
@@ -16,15 +15,10 @@ Factory = Callable[[], Simulator]
 DEFAULT_SIMULATOR = "kinematic2d"
 
 
-def _check(name: str, obj: Any, origin: str) -> None:
-    if not callable(obj):
-        raise BadInput(f"--simulator: {origin}: simulator {name!r} is not a factory "
-                       "() -> Simulator")
-
-
 SIMULATORS: Registry[Factory] = Registry(
     group="llm_grop.simulators", kind="simulator", flag="--simulator", module=__name__,
-    builtins={"kinematic2d": "llm_grop.simulation.kinematic2d:Kinematic2D"}, check=_check)
+    builtins={"kinematic2d": "llm_grop.simulation.kinematic2d:Kinematic2D"},
+    factory="() -> Simulator")
 
 
 def register_simulator(name: str, factory: Factory) -> None:

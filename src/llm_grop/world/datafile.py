@@ -1,4 +1,5 @@
-"""Reading YAML data files users may write (catalogs, tasks); errors name the field."""
+"""Reading data files users may write (catalogs, tasks, scenes, the contract's JSON); errors
+name the field."""
 
 from __future__ import annotations
 
@@ -27,6 +28,13 @@ def load_yaml_model(text: str, where: str, model: type[M], top_key: str, label_k
         raise error(f"{where}{at}: not valid YAML") from None
     if not isinstance(raw, dict):
         raise error(f"{where}: top level: expected a mapping with a {top_key!r} list")
+    return validated(model, raw, where, label_key, error)
+
+
+def validated(model: type[M], raw: Any, where: str, label_key: str,
+              error: type[BadInput] = BadInput) -> M:
+    """``raw`` (parsed YAML or JSON) validated as ``model``; the first problem is ``error``
+    with one line ``<where>: <field path>: <reason>``."""
     try:
         return model.model_validate(raw)
     except ValidationError as exc:

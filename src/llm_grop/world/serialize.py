@@ -6,8 +6,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-from pydantic import ValidationError
-
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Arrangement, Placement
 from llm_grop.world.contract import (
@@ -19,7 +17,7 @@ from llm_grop.world.contract import (
     RelationDoc,
     TableDoc,
 )
-from llm_grop.world.datafile import field_path
+from llm_grop.world.datafile import validated
 from llm_grop.world.jsonio import rounded
 from llm_grop.world.llmlog import CallRecord, LLMSummary
 from llm_grop.world.relation import Relation
@@ -36,12 +34,7 @@ def read_doc(model: type[D], data: Any, where: str) -> D:
     """
     if not isinstance(data, Mapping):
         raise BadInput(f"{where}: expected a JSON object, got {type(data).__name__}")
-    try:
-        return model.model_validate(data)
-    except ValidationError as exc:
-        err = exc.errors()[0]
-        raise BadInput(f"{where}: {field_path(data, err['loc'], 'name')}: {err['msg']}"
-                       ) from None
+    return validated(model, data, where, "name")
 
 
 def _relation(rel: Relation, line: bool = False) -> RelationDoc:
