@@ -78,6 +78,10 @@ def test_run_json_is_valid(run_json: dict[str, Any]) -> None:
     _validate("arrangement", run_json["final"])
     assert run_json["simulator"] == "kinematic2d"
     assert RunDoc.model_validate(run_json).to_json() == json.loads(json.dumps(run_json))
+    later = json.loads(json.dumps(run_json))
+    later["scene"]["lighting"] = "dim"
+    later["steps"][0]["torque_nm"] = 1.5
+    assert RunDoc.model_validate(later).to_json() == later
 
 
 def test_arrangement_reads_back(run_json: dict[str, Any]) -> None:

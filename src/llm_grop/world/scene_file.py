@@ -57,9 +57,10 @@ _Size = tuple[PositiveFloat, PositiveFloat]
 
 
 class _SceneModel(BaseModel):
-    """A part of a scene file: unknown keys are typos, so they are refused."""
+    """A part of a scene. It keeps keys it does not know, so a run JSON a later version wrote
+    still reads; in a scene file they are typos, and :func:`parse_scene` refuses them."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="allow")
 
 
 class RoomEntry(_SceneModel):
@@ -121,6 +122,9 @@ def parse_scene(text: str, where: str) -> Scene:
     Raises :class:`BadInput` with one line ``<where>: <field path>: <reason>``.
     """
     m = load_yaml_model(text, where, SceneFile, "tables", "name")
+    typo = _unknown_key(m)
+    if typo is not None:
+        raise BadInput(f"{where}: {typo}: Extra inputs are not permitted")
 
     def fail(path: str, reason: str) -> BadInput:
         return BadInput(f"{where}: {path}: {reason}")
@@ -264,6 +268,23 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     if not (scene.chairs_listed or scene.chairs):
         del out["chairs"]
     return out
+
+
+def _unknown_key(m: BaseModel, path: str = "") -> str | None:
+    """The path of the first key in ``m`` that the scene layout does not know, or ``None``."""
+    for key in m.model_extra or {}:
+        return f"{path}{key}"
+    for field in type(m).model_fields:
+        value = getattr(m, field)
+        entries = enumerate(value) if isinstance(value, list) else [(None, value)]
+        for i, entry in entries:
+            if isinstance(entry, BaseModel):
+                label = "" if i is None else f"[{i}]" + (
+                    f" ({entry.name!r})" if getattr(entry, "name", None) else "")
+                found = _unknown_key(entry, f"{path}{field}{label}.")
+                if found is not None:
+                    return found
+    return None
 
 
 def _box(m: WallEntry) -> Box:
