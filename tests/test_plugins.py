@@ -156,6 +156,10 @@ def faulty_site(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
         [llm_grop.simulators]
         broken-sim = llm_grop_faulty_absent:SIMULATOR
+        failing-sim = llm_grop_faulty:failing_simulator
+
+        [llm_grop.llm_backends]
+        not-an-llm = llm_grop_faulty:NotLLM
         """,
         {"llm_grop_faulty": """\
             from llm_grop.methods.base import ComposedMethod
@@ -164,6 +168,15 @@ def faulty_site(tmp_path_factory: pytest.TempPathFactory) -> Path:
                                   standing="uniform", best_of_all=False)
             MISNAMED = ComposedMethod("other", "named unlike its entry point",
                                       uses_llm=False, standing="uniform", best_of_all=False)
+
+
+            def failing_simulator():
+                raise RuntimeError("no physics engine here")
+
+
+            class NotLLM:
+                def __init__(self, options):
+                    self.options = options
             """,
          "llm_grop_faulty_boom": """\
             raise RuntimeError("demo plugin cannot start")
@@ -329,6 +342,14 @@ def test_picklable_run_time_method_is_handed_over(forget_runtime: list[str]) -> 
     pytest.param(["--methods", "classy"],
                  ["--methods: plugin llm-grop-faulty 0.1: 'classy' is not a method instance"],
                  id="class-not-instance"),
+    pytest.param(["--methods", "grop", "--simulator", "failing-sim"],
+                 ["--simulator: plugin llm-grop-faulty 0.1: simulator 'failing-sim' failed to "
+                  "start: RuntimeError: no physics engine here"],
+                 id="factory-raises"),
+    pytest.param(["--methods", "llm-grop", "--llm", "not-an-llm"],
+                 ["--llm: plugin llm-grop-faulty 0.1: backend 'not-an-llm' made an object "
+                  "without backend, model, complete"],
+                 id="backend-makes-no-llm"),
 ])
 def test_faulty_plugin_gives_one_line_error(args: list[str], expected: list[str],
                                             faulty_site: Path, tmp_path: Path) -> None:
@@ -405,3 +426,36 @@ def test_plugin_cannot_take_a_builtin_name(tmp_path: Path) -> None:
                        ("backend", "replay")):
         assert (f"WARNING llm_grop.plugins plugin {kind} {name!r} from llm-grop-shadow 0.1 "
                 f"is ignored: llm-grop ships a {kind} of that name") in proc.stderr
+
+
+def test_entry_defined_in_an_interactive_main_is_refused_before_the_bench(tmp_path: Path
+                                                                         ) -> None:
+    """A factory defined in ``python -c`` pickles by name but no worker can import it."""
+    code = textwrap.dedent("""\
+        import sys
+        from pathlib import Path
+        from llm_grop.errors import BadInput
+        from llm_grop.experiment.runner import Experiment, run_experiment
+        from llm_grop.experiment.trial import TrialSettings
+        from llm_grop.simulation.kinematic2d import Kinematic2D
+        from llm_grop.simulation.registry import register_simulator
+
+        class Mine(Kinematic2D):
+            name = "mine"
+
+        register_simulator("mine", Mine)
+        out = Path(sys.argv[1])
+        try:
+            run_experiment(Experiment((1,), 1, ("grop",), TrialSettings(simulator="mine")),
+                           out, workers=2)
+        except BadInput as exc:
+            print(exc)
+        print("exists" if out.exists() else "absent")
+        """)
+    out = tmp_path / "bench"
+    proc = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True,
+                          text=True, timeout=TIMEOUT_S, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "--simulator: simulator 'mine' was registered at run time but cannot reach worker " \
+           "processes (it was defined in an interactive __main__)" in proc.stdout
+    assert proc.stdout.strip().endswith("absent")

@@ -33,12 +33,13 @@ from __future__ import annotations
 import importlib
 import logging
 import pickle
-from collections.abc import Callable, Mapping
+import sys
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
 from typing import Any, Generic, TypeVar
 
-from llm_grop.errors import BadInput
+from llm_grop.errors import BadInput, LLMGropError
 
 T = TypeVar("T")
 
@@ -60,6 +61,7 @@ class Registry(Generic[T]):
         builtins: what llm-grop ships: name -> ``"module:attribute"``, loaded on first use.
         factory: for kinds whose entries are factories, their signature (``() -> Simulator``);
             an entry that is not callable is refused.
+        product: attributes an object a factory makes must have (``("name", "execute")``).
         check: raises :class:`BadInput` when a loaded object is not a valid entry; it gets
             the entry's name, the object and where it came from.
     """
@@ -70,6 +72,7 @@ class Registry(Generic[T]):
     module: str
     builtins: Mapping[str, str]
     factory: str | None = None
+    product: tuple[str, ...] = ()
     check: Callable[[str, Any, str], None] | None = None
     _runtime: dict[str, Any] = field(default_factory=dict)
     _loaded: dict[str, Any] = field(default_factory=dict)
@@ -103,7 +106,10 @@ class Registry(Generic[T]):
                 if key in self.builtins:
                     log.warning("plugin %s %r from %s is ignored: llm-grop ships a %s of "
                                 "that name", self.kind, key, _dist(ep), self.kind)
-                elif key not in found:
+                elif key in found:
+                    log.warning("plugin %s %r from %s is ignored: %s declares it too",
+                                self.kind, key, _dist(ep), _dist(found[key]))
+                else:
                     found[key] = ep
             self._plugins = found
         return self._plugins
@@ -155,6 +161,37 @@ class Registry(Generic[T]):
         self._loaded[key] = obj
         return obj  # type: ignore[no-any-return]
 
+    def key(self, name: str) -> str:
+        """The canonical name of an available entry (``" GROP"`` -> ``"grop"``); raises
+        :class:`BadInput` for an unknown one."""
+        key = _normal(name)
+        if key not in self._runtime and key not in self.builtins and key not in self.plugins():
+            raise self._unknown(name)
+        return key
+
+    def create(self, name: str, *args: Any) -> Any:
+        """What the factory registered as ``name`` makes of ``args``.
+
+        A plugin's factory that fails, or makes an object without :attr:`product`'s
+        attributes, is :class:`BadInput` naming the plugin (llm-grop's own errors pass).
+        """
+        key = self.key(name)
+        origin = self.origin(key)
+        try:
+            made = self.get(key)(*args)
+        except LLMGropError:
+            raise
+        except Exception as exc:
+            if origin == "llm-grop":
+                raise
+            raise BadInput(f"{self.flag}: {origin}: {self.kind} {key!r} failed to start: "
+                           f"{type(exc).__name__}: {exc}") from None
+        missing = [a for a in self.product if not hasattr(made, a)]
+        if missing:
+            raise BadInput(f"{self.flag}: {origin}: {self.kind} {key!r} made an object "
+                           f"without {', '.join(missing)}")
+        return made
+
     def _validate(self, name: str, obj: Any, origin: str) -> None:
         if self.factory is not None and not callable(obj):
             raise BadInput(f"{self.flag}: {origin}: {self.kind} {name!r} is not a factory "
@@ -177,25 +214,41 @@ def _dist(ep: metadata.EntryPoint) -> str:
     return f"{dist.name} {dist.version}" if dist is not None else ep.value
 
 
-def registered() -> dict[str, tuple[str, dict[str, Any]]]:
-    """Every entry registered at run time, as ``group -> (registry module, entries)``.
+def registered(used: Mapping[str, Iterable[str]] | None = None
+               ) -> dict[str, tuple[str, dict[str, Any]]]:
+    """The entries registered at run time, as ``group -> (registry module, entries)``:
+    all of them, or only the names ``used`` lists per group.
 
-    Raises :class:`BadInput` when one cannot be sent to another process (it is not
-    defined at module level); register it in a module, or declare an entry point.
+    Raises :class:`BadInput` when one cannot reach another process: it does not pickle, or
+    it was defined in a ``__main__`` that a new process cannot import (``python -c``, a
+    notebook). Register it in a module, or declare an entry point.
     """
     out: dict[str, tuple[str, dict[str, Any]]] = {}
     for group, reg in _REGISTRIES.items():
-        for name, entry in reg._runtime.items():
-            try:
-                pickle.dumps(entry)
-            except Exception as exc:  # noqa: BLE001 - any pickling failure means the same
+        wanted = None if used is None else {_normal(n) for n in used.get(group, ())}
+        entries = {n: e for n, e in reg._runtime.items() if wanted is None or n in wanted}
+        for name, entry in entries.items():
+            reason = _unportable(entry)
+            if reason is not None:
                 raise BadInput(f"{reg.flag}: {reg.kind} {name!r} was registered at run time "
-                               f"but cannot reach worker processes ({type(exc).__name__}); "
-                               "define it at module level, declare it as an entry point, "
-                               "or use one worker") from None
-        if reg._runtime:
-            out[group] = (reg.module, dict(reg._runtime))
+                               f"but cannot reach worker processes ({reason}); define it in "
+                               "a module, declare it as an entry point, or use one worker")
+        if entries:
+            out[group] = (reg.module, entries)
     return out
+
+
+def _unportable(entry: Any) -> str | None:
+    """Why ``entry`` cannot be sent to a spawned process, or ``None``."""
+    main = sys.modules.get("__main__")
+    modules = {getattr(entry, "__module__", None), type(entry).__module__}
+    if "__main__" in modules and not getattr(main, "__file__", None):
+        return "it was defined in an interactive __main__"
+    try:
+        pickle.dumps(entry)
+    except Exception as exc:  # noqa: BLE001 - any pickling failure means the same
+        return type(exc).__name__
+    return None
 
 
 def restore(entries: Mapping[str, tuple[str, Mapping[str, Any]]]) -> None:
@@ -205,8 +258,3 @@ def restore(entries: Mapping[str, tuple[str, Mapping[str, Any]]]) -> None:
         reg = _REGISTRIES[group]
         for name, entry in named.items():
             reg.register(name, entry)
-
-
-def registries() -> dict[str, Registry[Any]]:
-    """Every registry made so far, by entry point group."""
-    return dict(_REGISTRIES)

@@ -6,20 +6,23 @@ method run on the same seed sees the same room, chairs and object starts (the pa
 comparison is paired). The same seed, stage and path always give the same stream, in any
 process.
 
-==================== ====================================================== ==========
-stage                what it seeds                                          path
-==================== ====================================================== ==========
-``llm.relations``    the Template 1 call of each attempt                    attempt
-``llm.followup``     the follow-up call for a left-out object               attempt, k
-``llm.distance``     the Template 2 call of the k-th relation                k
-``sampler``          the LLM-guided Gaussian rejection sampler (M configs)
+====================== ====================================================== ==========
+stage                  what it seeds                                          path
+====================== ====================================================== ==========
+``llm.relations``      the Template 1 call of each attempt                    attempt
+``llm.followup``       the follow-up call for a left-out object               attempt, k
+``llm.distance``       the Template 2 call of the k-th relation                k
+``sampler``            the LLM-guided Gaussian rejection sampler (M configs)
 ``random_arrangement`` the baselines' random collision-free arrangement
-``chairs``           the chairs sampled near the target table
-``scene``            where each requested object starts
-``standing``         the baselines' uniform choice of standing positions
-``ompl``             OMPL's RRTConnect for the plan's k-th navigation leg   k
-``simulator``        the simulator's outcomes and noise
-==================== ====================================================== ==========
+``chairs``             the chairs sampled near the target table
+``scene``              where each requested object starts
+``standing``           the baselines' uniform choice of standing positions
+``ompl``               OMPL's RRTConnect for the plan's k-th navigation leg   k
+``simulator``          the simulator's outcomes and noise
+====================== ====================================================== ==========
+
+OMPL takes its seed through a process-wide setting; the planner sets it, from the ``ompl``
+stage, immediately before it builds each RRTConnect, whose state stays local to that call.
 
 LLM calls keep the seeds llm-grop has always given them (stage ids 1-3), so recorded
 answers (``--record``) still replay.

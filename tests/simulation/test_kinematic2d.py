@@ -122,3 +122,17 @@ def test_robot_never_stands_inside_a_chair() -> None:
                 assert c >= r - 1e-6, (seed, s)
             for x, y in s.path:
                 assert not chair.box.contains(x, y, margin=r - 0.01), (seed, s)
+
+
+def test_default_truth_matches_the_planners_default_belief() -> None:
+    """As the README says: by default the world is as the planner believes it to be."""
+    from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY
+    from llm_grop.simulation.outcomes import ParametricOutcomes
+
+    truth, robot = ParametricOutcomes(), Robot()
+    for c in np.linspace(-0.05, 0.3, 36):
+        belief = float(DEFAULT_FEASIBILITY.navigation(np.array([c]))[0])
+        assert truth.navigation(float(c)) == pytest.approx(belief, abs=1e-12)
+    for r in np.linspace(0.0, 1.0, 101):
+        belief = float(DEFAULT_FEASIBILITY.manipulation(np.array([r]), robot)[0])
+        assert truth.manipulation(float(r), robot) == pytest.approx(belief, abs=1e-12)

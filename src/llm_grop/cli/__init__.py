@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import logging
 import os
 import sys
-from typing import Any
 
 import click
 
 from llm_grop.cli.arrange import arrange
 from llm_grop.cli.bench import bench
+from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
 from llm_grop.cli.plugins import plugins
 from llm_grop.cli.rate import rate
@@ -18,47 +17,12 @@ from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
 from llm_grop.errors import LLMGropError
 
-#: Log level by the number of -v flags.
-_LEVELS = (logging.WARNING, logging.INFO, logging.DEBUG)
-
 
 @click.group(epilog=EPILOG)
 @click.version_option(package_name="llm-grop")
-@click.option("-v", "--verbose", count=True,
-              help="Log what happens to stderr: -v for each step, -vv for every detail.")
-def cli(verbose: int) -> None:
+@VERBOSE
+def cli() -> None:
     """llm-grop: set a table the way people expect (LLM-GROP, IROS 2023)."""
-    configure_logging(_LEVELS[min(verbose, len(_LEVELS) - 1)])
-
-
-def configure_logging(level: int) -> None:
-    """Send llm-grop's log records of ``level`` and above to stderr, one line each."""
-    logger = logging.getLogger("llm_grop")
-    logger.setLevel(level)
-    if not logger.handlers:
-        handler = _StderrHandler()
-        handler.setFormatter(_Formatter())
-        logger.addHandler(handler)
-
-
-class _StderrHandler(logging.StreamHandler):  # type: ignore[type-arg]
-    """Writes to whatever ``sys.stderr`` is at the time (tests and rich replace it)."""
-
-    @property  # type: ignore[override]
-    def stream(self) -> Any:
-        return sys.stderr
-
-    @stream.setter
-    def stream(self, _value: Any) -> None:
-        pass
-
-
-class _Formatter(logging.Formatter):
-    """``llm-grop: warning: ...``; with -v, the logger's name too."""
-
-    def format(self, record: logging.LogRecord) -> str:
-        where = "" if record.levelno >= logging.WARNING else f"{record.name}: "
-        return f"llm-grop: {record.levelname.lower()}: {where}{record.getMessage()}"
 
 
 cli.add_command(arrange)

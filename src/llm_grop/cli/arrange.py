@@ -7,10 +7,12 @@ from typing import Any
 
 import click
 
+from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
 
 
 @click.command(epilog=EPILOG)
+@VERBOSE
 @click.argument("request", required=False)
 @click.option("--task", type=click.IntRange(1),
               help="Use the objects of the paper's Table I task N.")

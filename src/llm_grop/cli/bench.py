@@ -8,6 +8,7 @@ from typing import Any
 
 import click
 
+from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG, SIMULATOR, llm_flags_without_record, llm_settings
 from llm_grop.errors import BadInput
 
@@ -74,6 +75,7 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 
 
 @click.command(epilog=EPILOG)
+@VERBOSE
 @click.option("--tasks", "tasks_text", default="paper", show_default=True,
               help="Task ids, ranges or tags: 1-8, 1,3,5, paper, smoke.")
 @click.option("--trials", default=20, show_default=True, type=click.IntRange(1),
@@ -119,7 +121,8 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     from llm_grop.experiment.runner import Experiment, run_experiment, write_reports
     from llm_grop.experiment.summary import print_summary
     from llm_grop.experiment.trial import TrialSettings
-    from llm_grop.llm.registry import BACKENDS
+    from llm_grop.llm.registry import BACKENDS, create_llm
+    from llm_grop.methods.registry import get_method
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.world.contract import TrialRow
     from llm_grop.world.scene_file import load_scene
@@ -129,14 +132,19 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     tasks = parse_tasks(tasks_text, known)
     methods = parse_methods(methods_text)
     llm_options, options = llm_settings(**flags)
-    # Unknown or broken components are reported before any trial runs.
-    create_simulator(simulator)
-    BACKENDS.get(flags["backend"])
+    # Unknown or broken components are reported before any trial runs, and their names
+    # are written canonically into the experiment's identity.
+    simulator = create_simulator(simulator).name
+    backend = BACKENDS.key(flags["backend"])
+    if any(get_method(m).uses_llm for m in methods):
+        create_llm(backend, llm_options)
+    else:
+        BACKENDS.get(backend)
     if scene_path is not None:
         load_scene(scene_path)  # a bad scene is reported before any trial runs
     _check_tasks(tasks, known, options, catalog_files)
     settings = TrialSettings(
-        backend=flags["backend"], llm_options=llm_options, arrange=options,
+        backend=backend, llm_options=llm_options, arrange=options,
         scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,
         task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
         images=None if no_images else str(out_dir / "images"), simulator=simulator)

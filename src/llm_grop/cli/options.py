@@ -9,6 +9,7 @@ from typing import Any, TypeVar
 import click
 
 from llm_grop.errors import BadInput
+from llm_grop.simulation.registry import DEFAULT_SIMULATOR
 
 EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
 
@@ -16,7 +17,8 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 _LLM_OPTIONS = [
     click.option("--llm", "backend", default="embedded", show_default=True,
-                 help="LLM backend: embedded, openai or replay."),
+                 help="LLM backend: embedded, openai, replay, or a plugin's "
+                      "(see `llm-grop plugins`)."),
     click.option("--model", help="Model name (openai) or GGUF path (embedded)."),
     click.option("--base-url", help="OpenAI-compatible endpoint (default: $OPENAI_BASE_URL)."),
     click.option("--replay", "replay_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -53,7 +55,7 @@ _LLM_OPTIONS = [
 
 
 SIMULATOR = click.option(
-    "--simulator", default="kinematic2d", show_default=True,
+    "--simulator", default=DEFAULT_SIMULATOR, show_default=True,
     help="The simulator that executes the plan (see `llm-grop plugins`).")
 
 
@@ -82,7 +84,7 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
     from llm_grop.arrangement.pipeline import ArrangeOptions
     from llm_grop.llm.base import BackendOptions, SamplingParams
 
-    if backend == "replay" and replay_path is None:
+    if backend.strip().lower() == "replay" and replay_path is None:
         raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
     params = SamplingParams(temperature, top_p, max_tokens, frequency_penalty, presence_penalty)
     from llm_grop.arrangement.preferences import load_preference_file

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import click
 
+from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
 
 
 @click.command(epilog=EPILOG)
+@VERBOSE
 def plugins() -> None:
     """List the LLM backends, methods and simulators available, shipped or from plugins.
 

@@ -8,6 +8,7 @@ from typing import Any
 
 import click
 
+from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
 from llm_grop.errors import BadInput
 
@@ -32,6 +33,8 @@ def read_rating_input(path: Path) -> tuple[dict[str, Any], str | None, str]:
         raise BadInput(f"{path}: expected a JSON object (an arrangement or a run JSON)")
     if "final" not in data:
         return data, None, str(path)
+    # Only `final` and `request` of a run JSON are read (and `final` is validated by the
+    # rater as an arrangement): a run written by another system may lack the rest.
     final = data["final"]
     if not isinstance(final, dict):
         raise BadInput(f"{path}: final: expected an arrangement object")
@@ -42,6 +45,7 @@ def read_rating_input(path: Path) -> tuple[dict[str, Any], str | None, str]:
 
 
 @click.command(epilog=EPILOG)
+@VERBOSE
 @click.argument("file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--request", "request_text",
               help="The request the arrangement answers (default: the file's `request`).")

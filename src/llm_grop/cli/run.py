@@ -7,17 +7,19 @@ from typing import Any
 
 import click
 
+from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG, SIMULATOR, check_request, llm_flags, llm_settings
 
 
 @click.command(epilog=EPILOG)
+@VERBOSE
 @click.argument("request", required=False)
 @click.option("--task", type=click.IntRange(1),
               help="Use the objects of the paper's Table I task N.")
 @click.option("--scene", "scene_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Dining-room scene YAML (default: the packaged dining room).")
 @click.option("--method", default="llm-grop", show_default=True,
-              help="tpra, latp, grop or llm-grop.")
+              help="tpra, latp, grop, llm-grop, or a plugin's (see `llm-grop plugins`).")
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
               help="Seed for the scene's chairs, the LLM, the sampler, the plan and execution.")
 @click.option("--chairs", type=click.IntRange(0),

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import click
 
+from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
 from llm_grop.world.contract import DOCUMENTS, schema_text
 
 
 @click.command(epilog=EPILOG)
+@VERBOSE
 @click.argument("name", type=click.Choice(sorted(DOCUMENTS)))
 def schema(name: str) -> None:
     """Print the JSON Schema of the arrangement JSON, the run JSON or a bench trial row.

@@ -186,6 +186,9 @@ def _rests_on(name: str, other: str, support: Mapping[str, str | None]) -> bool:
 def read_setting(doc: ArrangementDoc, requested: tuple[str, ...] | None, catalog: Catalog,
                  conv: Conventions, where: str = "arrangement") -> Setting:
     """A :class:`Setting` from the arrangement document ``doc``."""
+    if doc.table.shape != "rectangle":
+        raise BadInput(f"{where}: table.shape: only 'rectangle' is supported, got "
+                       f"{doc.table.shape!r}")
     width, depth = doc.table.size
     objects = tuple(_read_object(i, o, where, catalog) for i, o in enumerate(doc.objects))
     names = [o.name for o in objects]

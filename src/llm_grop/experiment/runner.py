@@ -161,11 +161,11 @@ def read_rows(out: Path) -> list[TrialRow]:
 
 
 def _key(row: TrialRow) -> tuple[str, int, int]:
-    return (row.method, row.task or 0, row.trial)
+    return (row.method, row.task, row.trial)
 
 
 def _sort_key(row: TrialRow) -> tuple[int, int, str]:
-    return (row.task or 0, row.trial, row.method)
+    return (row.task, row.trial, row.method)
 
 
 def _line(row: TrialRow) -> str:
@@ -174,22 +174,29 @@ def _line(row: TrialRow) -> str:
 
 # Each worker process keeps one runner (one LLM, catalog and scene) for all its trials.
 _RUNNER: TrialRunner | None = None
+# Why a worker could not start; reported with its first trial, because a pool restarts a
+# worker whose initializer raises, forever.
+_START_ERROR: Exception | None = None
 
 
 def _init_worker(settings: TrialSettings, registered: dict[str, tuple[str, dict[str, Any]]],
                  log_level: int) -> None:
-    global _RUNNER
-    if log_level < logging.WARNING:
-        logging.basicConfig(format="llm-grop: worker %(process)d: %(levelname)s: %(name)s: "
-                            "%(message)s")
-        logging.getLogger("llm_grop").setLevel(log_level)
+    global _RUNNER, _START_ERROR
+    logging.basicConfig(format="llm-grop: worker %(process)d: %(levelname)s: %(name)s: "
+                        "%(message)s")
+    logging.getLogger("llm_grop").setLevel(log_level)
     # The parent handles Ctrl-C and stops the workers; they must not die mid-row.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    plugins.restore(registered)
-    _RUNNER = TrialRunner(settings)
+    try:
+        plugins.restore(registered)
+        _RUNNER = TrialRunner(settings)
+    except Exception as exc:  # noqa: BLE001 - handed to the parent with the first trial
+        _START_ERROR = exc
 
 
 def _work(spec: TrialSpec) -> TrialRow:
+    if _START_ERROR is not None:
+        raise _START_ERROR
     assert _RUNNER is not None
     return _RUNNER(spec)
 
@@ -220,7 +227,9 @@ def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
     ``on_start(pending, skipped)`` is called once, ``on_row`` after each finished trial.
     """
     # Checked before the directory is made: an entry that cannot reach workers fails now.
-    registered = plugins.registered() if workers > 1 else {}
+    used = {BACKENDS.group: [exp.settings.backend], SIMULATORS.group: [exp.settings.simulator],
+            METHODS.group: list(exp.methods)}
+    registered = plugins.registered(used) if workers > 1 else {}
     prepare_dir(out, exp)
     if exp.settings.images is not None:
         Path(exp.settings.images).mkdir(parents=True, exist_ok=True)

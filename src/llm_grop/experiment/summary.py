@@ -141,8 +141,8 @@ def summarize(rows: Iterable[TrialRow | Mapping[str, Any]]) -> Summary:
             planning_time_s=stat(r.planning_time_s for r in mine),
             success_rate=stat(r.success for r in mine),
             trials=len(mine)))
-        for task in sorted({r.task or 0 for r in mine}):
-            on_task = [r for r in mine if (r.task or 0) == task]
+        for task in sorted({r.task for r in mine}):
+            on_task = [r for r in mine if r.task == task]
             per_task.append(TaskSummary(name, task, stat(r.rating for r in on_task),
                                         stat(r.execution_time_s for r in on_task)))
     return Summary(tuple(methods), tuple(per_task))

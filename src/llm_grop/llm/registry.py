@@ -16,7 +16,7 @@ BACKENDS: Registry[Factory] = Registry(
     builtins={"embedded": "llm_grop.llm.embedded:EmbeddedLLM",
               "openai": "llm_grop.llm.openai_backend:OpenAILLM",
               "replay": "llm_grop.llm.replay:ReplayLLM"},
-    factory="(BackendOptions) -> LLM")
+    factory="(BackendOptions) -> LLM", product=("backend", "model", "complete"))
 
 
 def register_backend(name: str, factory: Factory) -> None:
@@ -32,4 +32,5 @@ def available_backends() -> list[str]:
 
 def create_llm(name: str, options: BackendOptions | None = None) -> LLM:
     """Build the backend called ``name``; its heavy imports happen only here."""
-    return BACKENDS.get(name)(options or BackendOptions())
+    llm: LLM = BACKENDS.create(name, options or BackendOptions())
+    return llm

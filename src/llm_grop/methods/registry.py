@@ -28,7 +28,7 @@ def _check(name: str, obj: Any, origin: str) -> None:
     if missing or not callable(getattr(obj, "propose", None)) or isinstance(obj, type):
         raise BadInput(f"--method: {origin}: {name!r} is not a method instance (it needs "
                        f"{', '.join(_FIELDS)} and propose())")
-    if obj.name != name:
+    if str(obj.name).strip().lower() != name:
         raise BadInput(f"--method: {origin}: method registered as {name!r} is named "
                        f"{obj.name!r}; the two must agree")
     if obj.standing not in ("utility", "uniform"):

@@ -1,4 +1,4 @@
-"""Pictures and terminal summaries of arrangements and runs."""
+"""Pictures of arrangements and runs, drawn from plain world records."""
 
 from llm_grop.render.room import draw_run
 from llm_grop.render.table import draw_arrangement

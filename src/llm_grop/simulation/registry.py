@@ -18,7 +18,7 @@ DEFAULT_SIMULATOR = "kinematic2d"
 SIMULATORS: Registry[Factory] = Registry(
     group="llm_grop.simulators", kind="simulator", flag="--simulator", module=__name__,
     builtins={"kinematic2d": "llm_grop.simulation.kinematic2d:Kinematic2D"},
-    factory="() -> Simulator")
+    factory="() -> Simulator", product=("name", "execute"))
 
 
 def register_simulator(name: str, factory: Factory) -> None:
@@ -34,9 +34,9 @@ def available_simulators() -> list[str]:
 
 def create_simulator(name: str = DEFAULT_SIMULATOR) -> Simulator:
     """A new simulator by name; :class:`BadInput` for an unknown or malformed one."""
-    sim = SIMULATORS.get(name)()
-    key = name.strip().lower()
-    if getattr(sim, "name", None) != key or not callable(getattr(sim, "execute", None)):
-        raise BadInput(f"--simulator: {SIMULATORS.origin(key)}: simulator {key!r} must have "
-                       f"name {key!r} and an execute() method")
+    sim: Simulator = SIMULATORS.create(name)
+    key = SIMULATORS.key(name)
+    if sim.name != key:
+        raise BadInput(f"--simulator: {SIMULATORS.origin(key)}: simulator {key!r} calls itself "
+                       f"{sim.name!r}; the two must agree")
     return sim

@@ -57,9 +57,10 @@ class Doc(BaseModel):
 
 
 class TableDoc(Doc):
-    """The target table's top: ``size`` is ``[width, depth]`` in metres."""
+    """The target table's top: ``size`` is ``[width, depth]`` in metres (``[d, d]`` for a
+    round one)."""
 
-    shape: Literal["rectangle"] = "rectangle"
+    shape: Literal["rectangle", "circle"] = "rectangle"
     size: Size
 
 
@@ -239,6 +240,7 @@ class TrialRow(RunDoc):
     rating_explanation: RatingDoc
     image: Text | None = Field(None, description="the final table's picture, relative to "
                                                  "the results directory")
+    task: Int = Field(description="the task id")
 
 
 #: The published documents, by the name ``llm-grop schema`` takes.

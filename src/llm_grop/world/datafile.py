@@ -39,7 +39,22 @@ def validated(model: type[M], raw: Any, where: str, label_key: str,
         return model.model_validate(raw)
     except ValidationError as exc:
         err = exc.errors()[0]
-        raise error(f"{where}: {field_path(raw, err['loc'], label_key)}: {err['msg']}") from None
+        raise error(f"{where}: {field_path(raw, err['loc'], label_key)}: {_reason(err)}"
+                    ) from None
+
+
+#: Plain words for pydantic's messages that name its own classes.
+_PLAIN = {"model_type": "expected an object", "dict_type": "expected an object"}
+
+
+def _reason(err: Any) -> str:
+    """A validation error's message in plain words, with the value it got."""
+    msg = _PLAIN.get(err["type"], str(err["msg"]).removeprefix("Value error, "))
+    value = err.get("input")
+    if err["type"] != "missing" and not isinstance(value, dict | list) \
+            and len(repr(value)) <= 40:
+        msg += f", got {value!r}"
+    return msg
 
 
 def field_path(raw: Any, loc: tuple[int | str, ...], label_key: str) -> str:

@@ -82,15 +82,15 @@ def arrangement_to_dict(a: Arrangement) -> dict[str, Any]:
 def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -> Arrangement:
     """An :class:`Arrangement` from the contract's JSON (as written by any system).
 
-    Objects without ``shape`` or ``size`` are bad input here; the rater fills them in from
-    the catalog instead.
+    An object without ``shape`` is a box; one without ``size`` is bad input here (the
+    rater fills both in from the catalog instead).
     """
     doc = read_doc(ArrangementDoc, data, where)
     placements = []
     for i, o in enumerate(doc.objects):
-        if o.shape is None or o.size is None:
-            raise BadInput(f"{where}: objects[{i}] ({o.name!r}): needs shape and size")
-        placements.append(Placement(o.name, o.x, o.y, o.yaw, o.shape, o.size, o.on,
+        if o.size is None:
+            raise BadInput(f"{where}: objects[{i}] ({o.name!r}).size: missing")
+        placements.append(Placement(o.name, o.x, o.y, o.yaw, o.shape or "box", o.size, o.on,
                                     o.kind or o.name, o.height or 0.0))
     try:
         relations = tuple(Relation(r.subject, r.relation, r.reference) for r in doc.relations)
