@@ -112,6 +112,7 @@ def test_non_empty_directory_is_refused(tmp_path: Path, capsys) -> None:
     (["--seed", "-1"], "--seed"),
     (["--simulator", "gazebo"], "--simulator: unknown simulator 'gazebo'"),
     (["--llm", "claude"], "--llm: unknown backend 'claude'"),
+    (["--replay", "/nonexistent/calls.jsonl"], "calls.jsonl: replay file not found"),
     (["--prefer", "the dinner fork to the left of the dinner plate",
       "--prefer", "the dinner plate to the left of the dinner fork"],
      "task 1: preferences contradict each other"),
