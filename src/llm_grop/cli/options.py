@@ -9,6 +9,7 @@ from typing import Any, TypeVar
 import click
 
 from llm_grop.errors import BadInput
+from llm_grop.llm.registry import BACKENDS
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR
 
 EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
@@ -84,7 +85,7 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
     from llm_grop.arrangement.pipeline import ArrangeOptions
     from llm_grop.llm.base import BackendOptions, SamplingParams
 
-    if backend.strip().lower() == "replay" and replay_path is None:
+    if BACKENDS.key(backend) == "replay" and replay_path is None:
         raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
     params = SamplingParams(temperature, top_p, max_tokens, frequency_penalty, presence_penalty)
     from llm_grop.arrangement.preferences import load_preference_file
