@@ -12,6 +12,8 @@ command -v cmake >/dev/null || need_apt+=(cmake)
 command -v g++ >/dev/null || need_apt+=(g++)
 command -v make >/dev/null || need_apt+=(make)
 python3 -c "import venv, ensurepip" 2>/dev/null || need_apt+=(python3-venv)
+# MuJoCo renders offscreen through OSMesa (pictures and videos of the 3D simulator).
+ldconfig -p 2>/dev/null | grep -q libOSMesa || need_apt+=(libosmesa6)
 if [ ${#need_apt[@]} -gt 0 ]; then
     sudo_cmd=""
     [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"

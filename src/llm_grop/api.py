@@ -23,6 +23,7 @@ from llm_grop.world.tasks import Task, get_task, load_tasks
 
 if TYPE_CHECKING:
     from llm_grop.planning.utility import GropOptions
+    from llm_grop.simulation.base import Simulator
     from llm_grop.world.plan import RunResult
 
 __all__ = ["arrange", "available_methods", "available_simulators", "make_llm", "resolve_items",
@@ -75,7 +76,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         llm_options: BackendOptions | None = None, catalog: Catalog | None = None,
         catalog_files: Sequence[str | PathLike[str]] = (),
         options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
-        simulator: str = DEFAULT_SIMULATOR, planner: GropOptions | None = None,
+        simulator: str | Simulator = DEFAULT_SIMULATOR, planner: GropOptions | None = None,
         tasks: Mapping[int, Task] | None = None,
         on_event: Callable[[str], None] | None = None) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
@@ -86,7 +87,9 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     in the file means no chairs); the robot senses
     them at planning time.
     ``method`` is one of :func:`available_methods` and ``simulator`` one of
-    :func:`available_simulators` (the plan is the same whichever executes it); ``tasks``
+    :func:`available_simulators` or a simulator object, such as a
+    :class:`~llm_grop.simulation.mujoco.simulator.MujocoSimulator` with options (the plan
+    is the same whichever executes it); ``tasks``
     replaces the paper's Table I for ``task``. The same seed gives the same run.
     """
     # Planning pulls in OMPL and scipy; import them only when a run needs them.
@@ -99,7 +102,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     catalog = catalog or Catalog.load(catalog_files)
     text, items = resolve_items(request, task, catalog, tasks)
     chosen = get_method(method)
-    sim = create_simulator(simulator)
+    sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     for k, source in enumerate(base.sources):
         kind = re.sub(r"\s+\d+$", "", source.object)
@@ -110,6 +113,9 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     if chairs is None and not (base.chairs or base.chairs_listed):
         chairs = 1
     episode = prepare_episode(base, items, seed, chairs=chairs)
+    check = getattr(sim, "check", None)
+    if check is not None:
+        check(episode, items)
     log = None
     if chosen.uses_llm:
         log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)

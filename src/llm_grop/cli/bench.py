@@ -57,9 +57,9 @@ def parse_methods(text: str) -> tuple[str, ...]:
 
 
 def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
-                 catalog_files: tuple[Path, ...]) -> None:
-    """Unknown objects and bad preferences are reported before any trial runs (and writes
-    its directory)."""
+                 catalog_files: tuple[Path, ...], simulator: Any, scene: Any) -> None:
+    """Unknown objects, bad preferences and objects the simulator cannot handle are
+    reported before any trial runs (and writes its directory)."""
     from llm_grop.arrangement.preferences import read_preferences
     from llm_grop.world.catalog import Catalog
     from llm_grop.world.request import items_from_names
@@ -67,6 +67,12 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
     catalog = Catalog.load(catalog_files)
     for t in tasks:
         items = items_from_names(known[t].objects, catalog, where=f"task {t}: objects")
+        check = getattr(simulator, "check", None)
+        if check is not None:
+            try:
+                check(scene, items)
+            except BadInput as exc:
+                raise BadInput(f"task {t}: {exc}") from None
         if options.preferences or options.preference_pool:
             try:
                 read_preferences(options.preferences, options.preference_pool, items, catalog)
@@ -134,15 +140,19 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     llm_options, options = llm_settings(**flags)
     # Unknown or broken components are reported before any trial runs, and their names
     # are written canonically into the experiment's identity.
-    simulator = create_simulator(simulator).name
+    sim = create_simulator(simulator)
+    simulator = sim.name
+    if not no_images and hasattr(sim, "picture"):
+        from llm_grop.simulation.mujoco.render import check_rendering
+
+        check_rendering()
     backend = BACKENDS.key(flags["backend"])
     if any(get_method(m).uses_llm for m in methods):
         create_llm(backend, llm_options)
     else:
         BACKENDS.get(backend)
-    if scene_path is not None:
-        load_scene(scene_path)  # a bad scene is reported before any trial runs
-    _check_tasks(tasks, known, options, catalog_files)
+    scene = load_scene(scene_path)  # a bad scene is reported before any trial runs
+    _check_tasks(tasks, known, options, catalog_files, sim, scene)
     settings = TrialSettings(
         backend=backend, llm_options=llm_options, arrange=options,
         scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,

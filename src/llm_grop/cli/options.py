@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
@@ -53,6 +54,22 @@ _LLM_OPTIONS = [
     click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
                  help="Retries on transient LLM errors (connection, 429, 5xx)."),
 ]
+
+
+def check_outputs(**paths: Path | None) -> None:
+    """:class:`BadInput` for an output path (keyword: its flag, ``_`` for ``-``) that cannot
+    be written, before any work is spent."""
+    for flag, path in paths.items():
+        if path is None:
+            continue
+        name = "--" + flag.replace("_", "-")
+        parent = path.resolve().parent
+        if path.is_dir():
+            raise BadInput(f"{name} {path}: is a directory; give a file name")
+        if not parent.is_dir():
+            raise BadInput(f"{name} {path}: directory {parent} does not exist")
+        if not os.access(parent, os.W_OK):
+            raise BadInput(f"{name} {path}: directory {parent} is not writable")
 
 
 SIMULATOR = click.option(

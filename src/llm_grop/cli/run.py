@@ -8,7 +8,15 @@ from typing import Any
 import click
 
 from llm_grop.cli.logs import VERBOSE
-from llm_grop.cli.options import EPILOG, SIMULATOR, check_request, llm_flags, llm_settings
+from llm_grop.cli.options import (
+    EPILOG,
+    SIMULATOR,
+    check_outputs,
+    check_request,
+    llm_flags,
+    llm_settings,
+)
+from llm_grop.errors import BadInput
 
 
 @click.command(epilog=EPILOG)
@@ -31,11 +39,18 @@ from llm_grop.cli.options import EPILOG, SIMULATOR, check_request, llm_flags, ll
               help="Write the run JSON here.")
 @click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write a picture of the room, the robot's path and the final table here.")
+@click.option("--table-image", "table_image", type=click.Path(dir_okay=False, path_type=Path),
+              help="3D simulators: write an offscreen render of the final table, from above.")
+@click.option("--room-image", "room_image", type=click.Path(dir_okay=False, path_type=Path),
+              help="3D simulators: write an offscreen render of the room and the robot.")
+@click.option("--video", "video_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="--simulator mujoco: write an MP4 video of the episode.")
 @llm_flags
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
         chairs: int | None, simulator: str, w: float, json_path: Path | None,
-        image_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
+        image_path: Path | None, table_image: Path | None, room_image: Path | None,
+        video_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
         quiet: bool, **flags: Any) -> None:
     """Set the table in a simulated dining room: arrange, plan, execute (paper §III-C)."""
     from rich.console import Console
@@ -48,6 +63,9 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
 
     check_request("run", request, task)
     llm_options, options = llm_settings(**flags)
+    check_outputs(json=json_path, image=image_path, table_image=table_image,
+                  room_image=room_image, video=video_path)
+    sim = _simulator(simulator, table_image or room_image or video_path, video_path)
     err = Console(stderr=True)
     with err.status("starting", spinner="dots") as status:
         def on_event(message: str) -> None:
@@ -57,16 +75,42 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
         result = api_run(request, task=task, method=method, scene=scene_path, chairs=chairs,
                          seed=seed, llm=flags["backend"], llm_options=llm_options,
                          catalog_files=catalog_files, options=options, record=record_path,
-                         planner=GropOptions(w=w), simulator=simulator, on_event=on_event)
+                         planner=GropOptions(w=w), simulator=sim, on_event=on_event)
     if json_path is not None:
         write_json(json_path, run_to_dict(result))
     if image_path is not None:
         from llm_grop.render.room import draw_run
 
         draw_run(result, image_path)
+    for view, path in (("table", table_image), ("room", room_image)):
+        if path is not None:
+            from llm_grop.simulation.mujoco.render import save_png
+
+            save_png(sim.picture(view), path)  # type: ignore[union-attr]
     if not quiet:
         out = Console()
         print_run(result, out)
-        for label, path in (("run JSON", json_path), ("picture", image_path)):
+        for label, path in (("run JSON", json_path), ("picture", image_path),
+                            ("table render", table_image), ("room render", room_image),
+                            ("video", video_path)):
             if path is not None:
                 out.print(f"Wrote {label}: {path}")
+
+
+def _simulator(name: str, pictures: object, video: Path | None) -> Any:
+    """The simulator to run: ``name`` from the registry; with pictures or a video it must
+    render (MuJoCo), and rendering is checked before any work."""
+    from llm_grop.simulation.registry import SIMULATORS
+
+    if not pictures:
+        return name
+    if SIMULATORS.key(name) != "mujoco":
+        flag = "--video" if video else "--table-image/--room-image"
+        raise BadInput(f"{flag}: needs --simulator mujoco (got {name!r})")
+    from llm_grop.simulation.mujoco.render import check_rendering
+    from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
+
+    if video is not None and video.suffix.lower() != ".mp4":
+        raise BadInput(f"--video {video}: the video must be an .mp4 file")
+    check_rendering()
+    return MujocoSimulator(MujocoOptions(video_path=str(video) if video else None))

@@ -24,7 +24,7 @@ from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import get_method
 from llm_grop.planning.utility import GropOptions
 from llm_grop.render.table import draw_arrangement
-from llm_grop.simulation.registry import DEFAULT_SIMULATOR
+from llm_grop.simulation.registry import DEFAULT_SIMULATOR, create_simulator
 from llm_grop.world.arrangement import Arrangement
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.contract import TrialRow
@@ -86,6 +86,7 @@ class TrialRunner:
         self.catalog = Catalog.load(settings.catalog_files)
         self.tasks: dict[int, Task] = load_tasks(settings.task_files)
         self.scene: Scene = load_scene(settings.scene)
+        self.simulator = create_simulator(settings.simulator)
         self._backend: LLM | None = None
 
     def llm(self) -> CallLog:
@@ -105,7 +106,7 @@ class TrialRunner:
                          chairs=self.settings.chairs, seed=spec.seed,
                          llm=llm_log if llm_log is not None else "replay", catalog=self.catalog,
                          options=self.settings.arrange, planner=GropOptions(w=self.settings.w),
-                         simulator=self.settings.simulator)
+                         simulator=self.simulator)
         except Infeasible as exc:
             log.info("task %d trial %d %s: infeasible: %s", spec.task, spec.trial,
                      spec.method, exc)
@@ -127,12 +128,24 @@ class TrialRunner:
         extra: dict[str, Any] = {}
         if self.settings.images is not None:
             extra["image"] = self._draw(spec, task, final)
+            if episode["status"] == "ok" and hasattr(self.simulator, "picture"):
+                extra["render"] = self._render(spec)
         return TrialRow(
             **episode, trial=spec.trial, llm_calls=len(calls),
             llm_prompt_tokens=sum(c.prompt_tokens or 0 for c in calls),
             llm_completion_tokens=sum(c.completion_tokens or 0 for c in calls),
             llm_time_s=round(llm_log.wall_s, 4) if llm_log else 0.0,
             rating=rating.score, rating_explanation=rating.doc(), **extra)
+
+    def _render(self, spec: TrialSpec) -> str:
+        """Save the simulator's top-down render of the final table."""
+        from llm_grop.simulation.mujoco.render import save_png
+
+        name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}_render.png"
+        assert self.settings.images is not None
+        save_png(self.simulator.picture("table"),  # type: ignore[attr-defined]
+                 Path(self.settings.images) / name)
+        return f"images/{name}"
 
     def _draw(self, spec: TrialSpec, task: Task, final: Arrangement) -> str:
         name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}.png"

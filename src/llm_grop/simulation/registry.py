@@ -17,7 +17,8 @@ DEFAULT_SIMULATOR = "kinematic2d"
 
 SIMULATORS: Registry[Factory] = Registry(
     group="llm_grop.simulators", kind="simulator", flag="--simulator", module=__name__,
-    builtins={"kinematic2d": "llm_grop.simulation.kinematic2d:Kinematic2D"},
+    builtins={"kinematic2d": "llm_grop.simulation.kinematic2d:Kinematic2D",
+              "mujoco": "llm_grop.simulation.mujoco.simulator:MujocoSimulator"},
     factory="() -> Simulator", product=("name", "execute"))
 
 

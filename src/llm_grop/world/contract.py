@@ -240,6 +240,9 @@ class TrialRow(RunDoc):
     rating_explanation: RatingDoc
     image: Text | None = Field(None, description="the final table's picture, relative to "
                                                  "the results directory")
+    render: Text | None = Field(None, description="a 3D simulator's top-down render of the "
+                                                  "final table, relative to the results "
+                                                  "directory")
     task: Int = Field(description="the task id")
 
 

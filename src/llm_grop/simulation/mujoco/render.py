@@ -1,0 +1,127 @@
+"""Offscreen pictures of the MuJoCo world: the table from above, the room with the robot,
+and an episode video.
+
+Rendering needs an OpenGL library without a screen: OSMesa (apt ``libosmesa6``) or EGL
+(apt ``libegl1 libgl1-mesa-dri``, software rendering works). The package picks one when it
+is imported (see :mod:`llm_grop.simulation.mujoco`); ``MUJOCO_GL`` chooses explicitly.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+from typing import Literal
+
+import mujoco
+import numpy as np
+
+from llm_grop.errors import BadInput
+from llm_grop.simulation.mujoco.world import World
+
+View = Literal["table", "room"]
+
+#: Geom groups drawn: furniture and tableware (0), the robot (2); not sites (3).
+_GROUPS_TABLE = (1, 0, 0, 0, 0, 0)
+_GROUPS_ROOM = (1, 0, 1, 0, 0, 0)
+
+_APT = {"osmesa": "libosmesa6", "egl": "libegl1 libgl1-mesa-dri"}
+
+
+def check_rendering() -> None:
+    """:class:`BadInput` naming the apt package to install when offscreen rendering is
+    not available (checked before any work, by opening a tiny GL context)."""
+    backend = os.environ.get("MUJOCO_GL", "").lower()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # GLFW warns before it fails
+            renderer = mujoco.Renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 8, 8)
+            try:
+                renderer.render()
+            finally:
+                renderer.close()
+    except Exception as exc:  # noqa: BLE001 - any GL failure means the same to the user
+        if backend in _APT:
+            need = f"apt package {_APT[backend]} (MUJOCO_GL={backend})"
+        else:
+            need = "apt package libosmesa6 (or libegl1 and libgl1-mesa-dri for MUJOCO_GL=egl)"
+        raise BadInput(f"offscreen rendering is not available: install the {need} "
+                       f"({type(exc).__name__})") from None
+
+
+def picture(world: World, view: View, size: tuple[int, int] | None = None) -> np.ndarray:
+    """An RGB image (height x width x 3, uint8) of ``world`` now.
+
+    ``table``: the target table straight from above (orthographic), the diner at the
+    bottom, robot hidden, as the raters see it. ``room``: the whole room and the robot,
+    from above the diner's side.
+    """
+    m = world.m
+    width, height = size or (m.vis.global_.offwidth, m.vis.global_.offheight)
+    renderer = mujoco.Renderer(m, height=height, width=width)
+    try:
+        return _render(renderer, world, view)
+    finally:
+        renderer.close()
+
+
+def _render(renderer: mujoco.Renderer, world: World, view: View) -> np.ndarray:
+    option = mujoco.MjvOption()
+    option.geomgroup[:] = _GROUPS_TABLE if view == "table" else _GROUPS_ROOM
+    option.sitegroup[:] = 0
+    if view == "table":
+        renderer.update_scene(world.d, camera="table_top", scene_option=option)
+    else:
+        renderer.update_scene(world.d, camera=_room_camera(world), scene_option=option)
+    return renderer.render().copy()
+
+
+def _room_camera(world: World) -> mujoco.MjvCamera:
+    scene = world.scene
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+    cam.lookat[:] = (scene.width / 2, scene.depth / 2, 0.3)
+    cam.distance = 1.05 * max(scene.width, scene.depth)
+    cam.azimuth = 90.0
+    cam.elevation = -60.0
+    return cam
+
+
+def save_png(image: np.ndarray, path: str | os.PathLike[str]) -> Path:
+    """Write ``image`` to ``path`` as PNG; the path."""
+    from PIL import Image
+
+    out = Path(path)
+    Image.fromarray(image).save(out, format="PNG")
+    return out
+
+
+class VideoRecorder:
+    """Streams room views of an episode to an MP4 file (H.264 through imageio-ffmpeg):
+    pass it as the simulator's ``on_frame`` and call :meth:`close` at the end."""
+
+    def __init__(self, path: str | os.PathLike[str], *, fps: int = 25,
+                 size: tuple[int, int] = (640, 480)) -> None:
+        if Path(path).suffix.lower() != ".mp4":
+            raise BadInput(f"--video {path}: the video must be an .mp4 file")
+        import imageio_ffmpeg
+
+        self.path, self.size = Path(path), size
+        self._writer = imageio_ffmpeg.write_frames(str(self.path), size, fps=fps,
+                                                   macro_block_size=8, quality=6)
+        self._writer.send(None)
+        self._renderer: mujoco.Renderer | None = None
+        self.frames = 0
+
+    def __call__(self, world: World) -> None:
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(world.m, height=self.size[1], width=self.size[0])
+        self._writer.send(np.ascontiguousarray(_render(self._renderer, world, "room")))
+        self.frames += 1
+
+    def close(self) -> None:
+        """Finish the file."""
+        self._writer.close()
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None

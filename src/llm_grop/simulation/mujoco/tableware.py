@@ -1,0 +1,210 @@
+"""Tableware as rigid bodies: what each kind is made of and how the gripper holds it.
+
+Footprints and heights come from the plan's placements (the catalog); style, mass and
+friction come from ``assets/tableware.yaml``. All lengths in metres, masses in kilograms,
+angles in radians; an object's own frame has its origin at the centre of its footprint, on
+its bottom face, +x along the catalog's ``sx``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+from typing import Literal
+
+import mujoco
+from pydantic import BaseModel, ConfigDict, Field
+
+from llm_grop.errors import BadInput
+from llm_grop.world.arrangement import Placement
+from llm_grop.world.datafile import load_yaml_model
+
+Style = Literal["plate", "cylinder", "mug", "disk", "box", "bread", "berry"]
+
+#: The gripper's widest opening between its pads, metres (a Robotiq 2F-140 opens 0.14 m).
+MAX_OPENING_M = 0.14
+#: Widest plate or bowl whose rim the gripper may pinch and the arm carry, metres.
+MAX_RIM_DIAMETER_M = 0.40
+#: Tallest object the fingers can hold upright, metres.
+MAX_HEIGHT_M = 0.30
+#: Half height of a finger pad, metres (robot.xml); pads stay this far above a support.
+PAD_HALF_HEIGHT_M = 0.012
+#: Rim segments of a plate or bowl.
+RIM_SEGMENTS = 12
+
+#: Collision bits (robot.xml): tableware collides with furniture, robot, tableware, floor.
+CONTYPE, CONAFFINITY = 4, 1 | 2 | 4 | 8
+
+
+class _KindModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    style: Style
+    mass: float = Field(gt=0)
+    friction: tuple[float, float, float] | None = None
+
+
+class _DefaultModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    density: float = Field(gt=0)
+    friction: tuple[float, float, float]
+
+
+class _FileModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    default: _DefaultModel
+    kinds: dict[str, _KindModel]
+
+
+@cache
+def _table() -> _FileModel:
+    text = resources.files("llm_grop.simulation.mujoco").joinpath(
+        "assets/tableware.yaml").read_text(encoding="utf-8")
+    return load_yaml_model(text, "tableware.yaml", _FileModel, "kinds", "style")
+
+
+@dataclass(frozen=True)
+class Grasp:
+    """Where the pads close on an object, in the object's own frame.
+
+    ``point`` is the midpoint between the pads (metres); ``axis_yaw`` the direction the
+    pads close along (radians, about the object's z); ``width`` the object's extent
+    between the pads (metres).
+    """
+
+    point: tuple[float, float, float]
+    axis_yaw: float
+    width: float
+
+
+@dataclass(frozen=True)
+class Tableware:
+    """One physical object: its catalog footprint ``size`` (metres), ``height`` (metres),
+    ``style``, ``mass`` (kg) and ``friction`` (MuJoCo's three coefficients)."""
+
+    name: str
+    kind: str
+    shape: Literal["circle", "box"]
+    size: tuple[float, float]
+    height: float
+    style: Style
+    mass: float
+    friction: tuple[float, float, float]
+
+    @property
+    def radius(self) -> float:
+        """Half the larger footprint side, metres."""
+        return max(self.size) / 2
+
+    def rim(self) -> tuple[float, float]:
+        """A plate's rim: its width and the thickness of its base disk, metres."""
+        r = self.size[0] / 2
+        return min(0.03, 0.25 * r), min(0.006, self.height / 3)
+
+    def grasps(self) -> tuple[Grasp, ...]:
+        """Where the gripper may hold this object, best first (object frame).
+
+        A plate is pinched on its rim, the two pads either side of one rim segment; it is
+        listed at every segment, and the caller picks the one nearest the robot.
+        """
+        h = self.height
+        if self.style == "plate":
+            width, disk = self.rim()
+            r_mid = self.size[0] / 2 - width / 2
+            z = max(h / 2, disk + PAD_HALF_HEIGHT_M + 0.001)
+            return tuple(Grasp((r_mid * math.cos(a), r_mid * math.sin(a), z), a, width)
+                         for a in (2 * math.pi * (k + 0.5) / RIM_SEGMENTS
+                                   for k in range(RIM_SEGMENTS)))
+        z = max(h / 2 if h < 0.06 else h - 0.03, PAD_HALF_HEIGHT_M + 0.001)
+        if self.shape == "circle":
+            # The mug's handle points along +x, so the pads close across y.
+            return (Grasp((0.0, 0.0, z), math.pi / 2, self.size[0]),
+                    Grasp((0.0, 0.0, z), -math.pi / 2, self.size[0]))
+        sx, sy = self.size
+        yaw, width = (0.0, sx) if sx <= sy else (math.pi / 2, sy)
+        return (Grasp((0.0, 0.0, z), yaw, width), Grasp((0.0, 0.0, z), yaw + math.pi, width))
+
+
+def tableware(p: Placement) -> Tableware:
+    """The physical object for a planned placement; :class:`BadInput` when the gripper
+    cannot hold it."""
+    table = _table()
+    entry = table.kinds.get(p.kind)
+    sx, sy = p.size
+    h = p.height if p.height > 0 else 0.02
+    if entry is not None:
+        style, mass = entry.style, entry.mass
+        friction = entry.friction or table.default.friction
+    else:
+        style = "cylinder" if p.shape == "circle" else "box"
+        area = math.pi * sx * sx / 4 if p.shape == "circle" else sx * sy
+        mass, friction = table.default.density * area * h, table.default.friction
+    if style != "plate" and p.shape == "circle" and sx > MAX_OPENING_M:
+        style = "plate"
+    t = Tableware(p.name, p.kind or p.name, p.shape, (sx, sy), h, style, mass,
+                  tuple(friction))  # type: ignore[arg-type]
+    narrow = min(sx, sy)
+    too_wide = (narrow > MAX_OPENING_M and not (style == "plate" and p.shape == "circle")) \
+        or (style == "plate" and sx > MAX_RIM_DIAMETER_M)
+    if too_wide or h > MAX_HEIGHT_M:
+        what = f"{sx:.2f} x {sy:.2f} x {h:.2f} m"
+        raise BadInput(f"object {p.name!r} ({what}): too large for the gripper, which opens "
+                       f"{MAX_OPENING_M:.2f} m, pinches rims of plates up to "
+                       f"{MAX_RIM_DIAMETER_M:.2f} m and holds objects up to {MAX_HEIGHT_M:.2f} m "
+                       "tall")
+    return t
+
+
+def add_body(parent: mujoco.MjsBody, t: Tableware, pos: tuple[float, float, float],
+             yaw: float, rgba: tuple[float, float, float, float]) -> mujoco.MjsBody:
+    """Add ``t`` as a free body under ``parent`` with its bottom centre at ``pos`` (metres,
+    world frame) turned by ``yaw``; its mass is spread over its geoms by volume."""
+    body = parent.add_body(name=t.name, pos=list(pos),
+                           quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
+    body.add_freejoint(name=t.name)
+    geoms = list(_geoms(t))
+    volume = sum(v for *_, v in geoms)
+    for k, (gtype, size, gpos, gyaw, v) in enumerate(geoms):
+        body.add_geom(name=f"{t.name}#{k}", type=gtype, size=list(size), pos=list(gpos),
+                      quat=[math.cos(gyaw / 2), 0, 0, math.sin(gyaw / 2)],
+                      mass=t.mass * v / volume, friction=list(t.friction), rgba=list(rgba),
+                      contype=CONTYPE, conaffinity=CONAFFINITY, condim=4, group=0,
+                      solref=[0.004, 1.0], priority=1)
+    return body
+
+
+_G = mujoco.mjtGeom
+
+
+def _geoms(t: Tableware):  # noqa: ANN202 - (type, size, pos, yaw, volume) tuples
+    """The geoms of ``t`` in its body frame: ``(type, size, pos, yaw, volume)``."""
+    sx, sy = t.size
+    h = t.height
+    if t.style == "plate":
+        r = sx / 2
+        width, disk = t.rim()
+        yield _G.mjGEOM_CYLINDER, (r - width / 2, disk / 2, 0), (0, 0, disk / 2), 0.0, \
+            math.pi * (r - width / 2) ** 2 * disk
+        r_mid = r - width / 2
+        half_len = r_mid * math.tan(math.pi / RIM_SEGMENTS) + width / 4
+        for k in range(RIM_SEGMENTS):
+            a = 2 * math.pi * (k + 0.5) / RIM_SEGMENTS
+            yield _G.mjGEOM_BOX, (width / 2, half_len, h / 2), \
+                (r_mid * math.cos(a), r_mid * math.sin(a), h / 2), a, 2 * half_len * width * h
+    elif t.style in ("cylinder", "disk"):
+        yield _G.mjGEOM_CYLINDER, (sx / 2, h / 2, 0), (0, 0, h / 2), 0.0, math.pi * sx**2 / 4 * h
+    elif t.style == "mug":
+        r = sx / 2
+        yield _G.mjGEOM_CYLINDER, (r, h / 2, 0), (0, 0, h / 2), 0.0, math.pi * r * r * h
+        yield _G.mjGEOM_BOX, (0.012, 0.006, h * 0.22), (r + 0.010, 0, h * 0.6), 0.0, \
+            0.024 * 0.012 * h * 0.44
+    elif t.style == "berry":
+        yield _G.mjGEOM_ELLIPSOID, (sx / 2, sy / 2, h / 2), (0, 0, h / 2), 0.0, \
+            4 / 3 * math.pi * sx * sy * h / 8
+    elif t.style == "bread":
+        yield _G.mjGEOM_BOX, (sx / 2, sy / 2, h * 0.35), (0, 0, h * 0.35), 0.0, sx * sy * h * 0.7
+        yield _G.mjGEOM_BOX, (sx / 2 - 0.01, sy / 2 - 0.01, h * 0.15), (0, 0, h * 0.85), 0.0, \
+            (sx - 0.02) * (sy - 0.02) * h * 0.3
+    else:
+        yield _G.mjGEOM_BOX, (sx / 2, sy / 2, h / 2), (0, 0, h / 2), 0.0, sx * sy * h

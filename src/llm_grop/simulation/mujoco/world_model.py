@@ -1,0 +1,260 @@
+"""The dining room as a MuJoCo model, built from the scene with MuJoCo's model editor.
+
+The robot comes from ``assets/robot.xml``; floor, walls, tables with legs, chairs with seat,
+back and legs, and the tableware are added around it. World frame = the scene's room frame
+(metres, radians), z up from the floor. Furniture is fixed to the world; tableware bodies are
+free, each with an inactive weld to the hand that a grasp switches on (see
+:mod:`llm_grop.simulation.mujoco.world`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from importlib import resources
+
+import mujoco
+import numpy as np
+from shapely.geometry import Point, Polygon
+
+from llm_grop.errors import BadInput
+from llm_grop.simulation.mujoco.tableware import Tableware, add_body
+from llm_grop.world.geometry2d import Box
+from llm_grop.world.scene import Chair, Scene
+
+#: Furniture collision bits (robot.xml): collides with the robot (2) and tableware (4).
+FURNITURE = (1, 2 | 4)
+#: Floor collision bits: only tableware lands on it.
+FLOOR = (8, 4)
+#: Height of the outer and interior walls, metres (low, so the overview sees in).
+WALL_HEIGHT_M = 1.0
+#: Chairs: seat height, seat thickness, back height (metres).
+SEAT_Z_M, SEAT_T_M, BACK_TOP_M = 0.45, 0.04, 0.90
+#: Thickness of a table top and side of a square leg, metres.
+TOP_T_M, LEG_M = 0.03, 0.05
+#: Geom group of furniture and tableware in renders (robot.xml draws the robot in 2).
+GROUP_WORLD = 0
+
+_WOOD = (0.62, 0.45, 0.30, 1.0)
+_TARGET = (0.55, 0.40, 0.28, 1.0)
+_CHAIR = (0.35, 0.25, 0.18, 1.0)
+_WALL = (0.86, 0.85, 0.82, 1.0)
+_COLOURS = {"plate": (0.97, 0.97, 0.95, 1), "cylinder": (0.55, 0.75, 0.95, 0.9),
+            "mug": (0.20, 0.40, 0.75, 1), "disk": (0.15, 0.25, 0.45, 1),
+            "box": (0.75, 0.76, 0.78, 1), "bread": (0.80, 0.55, 0.25, 1),
+            "berry": (0.85, 0.10, 0.15, 1)}
+_KIND_COLOURS = {"mug mat": (0.30, 0.30, 0.32, 1), "napkin": (0.90, 0.85, 0.70, 1)}
+
+
+@dataclass(frozen=True)
+class ObjectStart:
+    """Where a piece of tableware starts: its bottom centre ``(x, y, z)`` (metres, room
+    frame) and ``yaw`` (radians)."""
+
+    item: Tableware
+    x: float
+    y: float
+    z: float
+    yaw: float = 0.0
+
+
+@dataclass(frozen=True)
+class WorldModel:
+    """A compiled dining room and the indices the simulator looks things up by.
+
+    Attributes:
+        model: the MuJoCo model.
+        objects: tableware by name.
+        furniture: per geom, whether it is furniture (tables, chairs, walls).
+        robot: per geom, whether it belongs to the robot.
+        arm: per geom, whether it belongs to the arm or the gripper.
+        fingers: per geom, whether it is a finger or pad (they may touch a table top).
+        owner: per geom, the tableware it belongs to ("" for none).
+        tops: table name -> geom id of its top.
+        welds: tableware name -> id of its grasp weld.
+    """
+
+    model: mujoco.MjModel
+    objects: dict[str, Tableware]
+    furniture: np.ndarray
+    robot: np.ndarray
+    arm: np.ndarray
+    fingers: np.ndarray
+    owner: tuple[str, ...]
+    tops: dict[str, int]
+    welds: dict[str, int]
+
+
+def robot_xml() -> str:
+    """The path of the robot's MJCF file."""
+    return str(resources.files("llm_grop.simulation.mujoco").joinpath("assets/robot.xml"))
+
+
+def check_scene(scene: Scene) -> None:
+    """:class:`BadInput` when the scene cannot be built: furniture that interpenetrates or
+    leaves the room, or a robot that starts inside something."""
+    room = Polygon([(0, 0), (scene.width, 0), (scene.width, scene.depth), (0, scene.depth)])
+    parts = [(f"table {t.name!r}", t.box) for t in scene.tables]
+    parts += [(f"chair {c.name!r}", c.box) for c in scene.chairs]
+    parts += [(f"wall {k}", w) for k, w in enumerate(scene.walls)]
+    polys = [(label, Polygon(b.corners())) for label, b in parts]
+    for label, poly in polys:
+        if not label.startswith("wall") and not room.buffer(1e-6).contains(poly):
+            raise BadInput(f"scene {scene.name!r}: {label} reaches outside the room")
+    for i, (a, pa) in enumerate(polys):
+        for b, pb in polys[i + 1:]:
+            if pa.intersection(pb).area > 1e-6:
+                raise BadInput(f"scene {scene.name!r}: {a} and {b} interpenetrate")
+    start = Point(scene.robot_start.x, scene.robot_start.y).buffer(scene.robot.base_radius_m)
+    for label, poly in polys:
+        if start.intersection(poly).area > 1e-6:
+            raise BadInput(f"scene {scene.name!r}: the robot starts inside {label}")
+
+
+def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.002,
+          image_size: tuple[int, int] = (640, 480)) -> WorldModel:
+    """The dining room of ``scene`` with the robot at its start and the tableware at
+    ``starts``. Raises :class:`BadInput` when the scene cannot be built."""
+    check_scene(scene)
+    spec = mujoco.MjSpec.from_file(robot_xml())
+    spec.modelname = "llm-grop dining room"
+    spec.option.timestep = timestep_s
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.visual.global_.offwidth, spec.visual.global_.offheight = image_size
+    spec.visual.headlight.ambient = [0.30, 0.30, 0.30]
+    spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
+    spec.visual.headlight.specular = [0.05, 0.05, 0.05]
+    world = spec.worldbody
+    _room(spec, scene)
+    for t in scene.tables:
+        _table(world, t.name, t.box, t.height, _TARGET if t.name == scene.target else _WOOD)
+    centre = scene.target_table.box
+    for c in scene.chairs:
+        _chair(world, c, (centre.x, centre.y))
+    for s in starts:
+        rgba = _KIND_COLOURS.get(s.item.kind, _COLOURS[s.item.style])
+        add_body(world, s.item, (s.x, s.y, s.z), s.yaw, rgba)
+        spec.add_equality(type=mujoco.mjtEq.mjEQ_WELD, name=f"grip:{s.item.name}",
+                          name1="hand", name2=s.item.name, objtype=mujoco.mjtObj.mjOBJ_BODY,
+                          active=False, solref=[0.004, 1.0])
+    _cameras(world, scene)
+    model = spec.compile()
+    return _index(model, scene, {s.item.name: s.item for s in starts})
+
+
+def _box_geom(body: mujoco.MjsBody, name: str, size: Sequence[float], pos: Sequence[float],
+              yaw: float, rgba: Sequence[float]) -> None:
+    body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=list(size), pos=list(pos),
+                  quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)], rgba=list(rgba),
+                  contype=FURNITURE[0], conaffinity=FURNITURE[1], group=GROUP_WORLD)
+
+
+def _room(spec: mujoco.MjSpec, scene: Scene) -> None:
+    tex = spec.add_texture(name="floor", type=mujoco.mjtTexture.mjTEXTURE_2D,
+                           builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=256, height=256,
+                           rgb1=[0.78, 0.76, 0.72], rgb2=[0.70, 0.68, 0.64])
+    mat = spec.add_material(name="floor", texrepeat=[scene.width * 2, scene.depth * 2])
+    mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = tex.name
+    w, d = scene.width, scene.depth
+    spec.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE,
+                            size=[w / 2, d / 2, 0.1], pos=[w / 2, d / 2, 0], material="floor",
+                            contype=FLOOR[0], conaffinity=FLOOR[1], friction=[1.0, 0.01, 0.001])
+    spec.worldbody.add_light(name="sun", pos=[w / 2, d / 2, 4.0], dir=[0.2, 0.3, -1.0],
+                             type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+                             diffuse=[0.45, 0.45, 0.45], specular=[0.05, 0.05, 0.05],
+                             castshadow=False)
+    t, hz = 0.05, WALL_HEIGHT_M / 2
+    for k, (pos, size) in enumerate((((w / 2, -t), (w / 2 + 2 * t, t)),
+                                     ((w / 2, d + t), (w / 2 + 2 * t, t)),
+                                     ((-t, d / 2), (t, d / 2)),
+                                     ((w + t, d / 2), (t, d / 2)))):
+        _box_geom(spec.worldbody, f"outer wall {k}", (*size, hz), (*pos, hz), 0.0, _WALL)
+    for k, b in enumerate(scene.walls):
+        _box_geom(spec.worldbody, f"wall {k}", (b.width / 2, b.depth / 2, hz), (b.x, b.y, hz),
+                  b.yaw, _WALL)
+
+
+def _table(world: mujoco.MjsBody, name: str, box: Box, height: float,
+           rgba: Sequence[float]) -> None:
+    body = world.add_body(name=f"table:{name}", pos=[box.x, box.y, 0],
+                          quat=[math.cos(box.yaw / 2), 0, 0, math.sin(box.yaw / 2)])
+    _box_geom(body, f"top:{name}", (box.width / 2, box.depth / 2, TOP_T_M / 2),
+              (0, 0, height - TOP_T_M / 2), 0.0, rgba)
+    leg_h = (height - TOP_T_M) / 2
+    for k, (sx, sy) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1))):
+        _box_geom(body, f"leg:{name}:{k}", (LEG_M / 2, LEG_M / 2, leg_h),
+                  (sx * (box.width / 2 - LEG_M), sy * (box.depth / 2 - LEG_M), leg_h), 0.0,
+                  _WOOD)
+
+
+def _chair(world: mujoco.MjsBody, chair: Chair, table_xy: tuple[float, float]) -> None:
+    """A chair whose back is on its side away from the target table's centre."""
+    b = chair.box
+    u, v = b.to_local(*table_xy)
+    # The back's direction in the chair's frame: the axis pointing away from the table.
+    if abs(u) / b.width > abs(v) / b.depth:
+        back = (-math.copysign(1, u), 0.0)
+    else:
+        back = (0.0, -math.copysign(1, v))
+    body = world.add_body(name=f"chair:{chair.name}", pos=[b.x, b.y, 0],
+                          quat=[math.cos(b.yaw / 2), 0, 0, math.sin(b.yaw / 2)])
+    hw, hd = b.width / 2, b.depth / 2
+    _box_geom(body, f"seat:{chair.name}", (hw, hd, SEAT_T_M / 2), (0, 0, SEAT_Z_M), 0.0, _CHAIR)
+    for k, (sx, sy) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1))):
+        _box_geom(body, f"chair leg:{chair.name}:{k}", (0.02, 0.02, SEAT_Z_M / 2),
+                  (sx * (hw - 0.03), sy * (hd - 0.03), SEAT_Z_M / 2), 0.0, _CHAIR)
+    back_h = (BACK_TOP_M - SEAT_Z_M) / 2
+    if back[0]:
+        size, pos = (0.02, hd, back_h), (back[0] * (hw - 0.02), 0, SEAT_Z_M + back_h)
+    else:
+        size, pos = (hw, 0.02, back_h), (0, back[1] * (hd - 0.02), SEAT_Z_M + back_h)
+    _box_geom(body, f"back:{chair.name}", size, pos, 0.0, _CHAIR)
+
+
+def _cameras(world: mujoco.MjsBody, scene: Scene) -> None:
+    """``table_top``: orthographic, straight down on the target table, image up = the
+    table's +y (away from the diner)."""
+    t = scene.target_table
+    b = t.box
+    cam = world.add_camera(name="table_top", pos=[b.x, b.y, t.height + 1.5],
+                           quat=[math.cos(b.yaw / 2), 0, 0, math.sin(b.yaw / 2)])
+    cam.proj = mujoco.mjtProjection.mjPROJ_ORTHOGRAPHIC
+    cam.fovy = max(b.depth, b.width * 3 / 4) * 1.15
+
+
+def _index(model: mujoco.MjModel, scene: Scene, objects: dict[str, Tableware]) -> WorldModel:
+    ng = model.ngeom
+    robot_bodies = _subtree(model, model.body("base").id)
+    arm_bodies = _subtree(model, model.body("shoulder").id)
+    furniture = np.zeros(ng, bool)
+    robot = np.zeros(ng, bool)
+    arm = np.zeros(ng, bool)
+    fingers = np.zeros(ng, bool)
+    owner = [""] * ng
+    body_owner = {model.body(n).id: n for n in objects}
+    for g in range(ng):
+        name = model.geom(g).name
+        body = int(model.geom_bodyid[g])
+        robot[g] = body in robot_bodies
+        arm[g] = body in arm_bodies
+        fingers[g] = name.startswith(("finger_", "pad_"))
+        owner[g] = body_owner.get(body, "")
+        furniture[g] = not robot[g] and not owner[g] and name != "floor"
+    tops = {t.name: model.geom(f"top:{t.name}").id for t in scene.tables}
+    welds = {n: model.equality(f"grip:{n}").id for n in objects}
+    return WorldModel(model, objects, furniture, robot, arm, fingers, tuple(owner), tops,
+                      welds)
+
+
+def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
+    """Ids of ``root`` and every body below it."""
+    out = set()
+    for b in range(model.nbody):
+        k = b
+        while k not in (0, root):
+            k = int(model.body_parentid[k])
+        if k == root:
+            out.add(b)
+    return out

@@ -1,0 +1,178 @@
+"""The MuJoCo simulator: real physics, real IK, real offscreen rendering."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cli_support import one_line_error
+from llm_grop import seeds
+from llm_grop.api import run
+from llm_grop.cli import main
+from llm_grop.errors import BadInput
+from llm_grop.planning.grop import build_plan, choose
+from llm_grop.planning.navigation import Navigator
+from llm_grop.planning.utility import PlanningContext
+from llm_grop.simulation.mujoco.simulator import MujocoSimulator
+from llm_grop.simulation.mujoco.tableware import tableware
+from llm_grop.world.arrangement import Placement
+from llm_grop.world.catalog import Catalog
+from llm_grop.world.geometry2d import Box
+from llm_grop.world.plan import Plan
+from llm_grop.world.request import items_from_names
+from llm_grop.world.run_json import run_to_dict
+from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
+from scenes import config, two_table_room
+
+
+def _item(name: str, x: float, y: float, on: str | None = None) -> Placement:
+    spec = Catalog.load().resolve(name)
+    return Placement(name, x, y, 0.0, spec.shape, spec.size, on, spec.name, spec.height)
+
+
+def _plan(scene: Scene, *placements: Placement) -> tuple[Plan, Navigator]:
+    ctx = PlanningContext(scene, items_from_names([p.name for p in placements], Catalog.load()))
+    nav = Navigator(scene, scene.robot.base_radius_m)
+    return build_plan(ctx, choose(ctx, [config(*placements)]), nav, seed=0,
+                      configurations=1), nav
+
+
+def test_one_object_episode_succeeds() -> None:
+    result = run("a dinner plate", method="grop", seed=0, chairs=0, simulator="mujoco")
+    assert result.success and result.simulator == "mujoco"
+    (plate,) = result.final.placements
+    planned = result.plan.configuration[0]
+    assert math.dist((plate.x, plate.y), (planned.x, planned.y)) < 0.03
+    assert result.execution.execution_time_s > 10
+
+
+def test_same_seed_same_run_json() -> None:
+    a, b, c = (run_to_dict(run("a mug, a mug lid and a dinner fork", method="grop", seed=s,
+                               chairs=1, simulator="mujoco")) for s in (3, 3, 4))
+    for doc in (a, b, c):
+        doc.pop("planning_time_s")  # wall-clock seconds
+    assert a == b
+    assert a["steps"] != c["steps"]
+
+
+def test_lid_settles_on_the_mug_and_bread_on_its_plate() -> None:
+    scene = two_table_room(sources=tuple(
+        ObjectSource(name, "counter", 0.45, y)
+        for name, y in (("mug", 1.55), ("mug lid", 1.8), ("dinner plate", 2.1),
+                        ("bread", 2.4))))
+    plan, nav = _plan(scene, _item("mug", 0.2, 0.0), _item("mug lid", 0.2, 0.0, on="mug"),
+                      _item("dinner plate", -0.15, 0.0),
+                      _item("bread", -0.15, 0.0, on="dinner plate"))
+    ex = MujocoSimulator().execute(plan, scene, seeds.stream(1, "simulator"), replan=nav)
+    final = {p.name: p for p in ex.final}
+    assert final["mug lid"].on == "mug"
+    assert final["bread"].on == "dinner plate"
+    assert final["mug"].on is None and final["dinner plate"].on is None
+    assert math.dist((final["mug lid"].x, final["mug lid"].y),
+                     (final["mug"].x, final["mug"].y)) < 0.03
+
+
+def test_a_chair_on_the_path_is_a_contact_a_failure_and_a_replan() -> None:
+    scene = two_table_room()
+    plan, _ = _plan(scene, _item("dinner fork", 0.0, -0.1))
+    # Put a chair across the middle of the longest planned segment to the counter.
+    leg = plan.steps[0]
+    a, b = max(zip(leg.path, leg.path[1:], strict=False), key=lambda s: math.dist(*s))
+    mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+    heading = math.atan2(b[1] - a[1], b[0] - a[0])
+    chair = Chair("surprise", Box(mid[0], mid[1], 0.45, 0.45, heading))
+    real = scene.with_chairs((chair,))
+    nav = Navigator(real, real.robot.base_radius_m)
+    ex = MujocoSimulator().execute(plan, real, seeds.stream(0, "simulator"), replan=nav)
+    first = ex.steps[0]
+    assert first.action == "navigate" and not first.ok
+    assert "contact with chair 'surprise'" in first.note
+    retry = ex.steps[1]
+    assert retry.action == "navigate" and retry.ok and retry.attempt == 2
+    assert retry.object == first.object
+    assert ex.success
+
+
+def test_table_render_shows_the_table_and_the_plate(tmp_path: Path) -> None:
+    sim = MujocoSimulator()
+    run("a dinner plate", method="grop", seed=0, chairs=0, simulator=sim)
+    image = sim.picture("table").astype(float)
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    wood = (r > g + 15) & (g > b + 10) & (r > 90)
+    white = (r > 215) & (g > 215) & (b > 215)
+    # The table top fills most of the view; the plate is a large white disc on it.
+    assert wood.mean() > 0.4
+    assert 0.05 < white.mean() < 0.4
+    ys, xs = np.nonzero(white)
+    h, w = white.shape
+    assert abs(xs.mean() - w / 2) < w * 0.3 and abs(ys.mean() - h / 2) < h * 0.3
+    room = sim.picture("room").astype(float)
+    assert room.std() > 20  # not a blank frame
+
+
+def test_run_writes_renders_and_video(tmp_path: Path) -> None:
+    paths = {k: tmp_path / f"{k}.{ext}" for k, ext in
+             (("table", "png"), ("room", "png"), ("video", "mp4"))}
+    assert main(["run", "a dinner fork", "--method", "grop", "--chairs", "0",
+                 "--simulator", "mujoco", "--table-image", str(paths["table"]),
+                 "--room-image", str(paths["room"]), "--video", str(paths["video"]),
+                 "-q"]) == 0
+    for p in paths.values():
+        assert p.stat().st_size > 1000
+    assert paths["table"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_interpenetrating_furniture_is_bad_input() -> None:
+    # Scene files are checked when read; a scene built in Python meets the builder's check.
+    scene = two_table_room(chairs=(Chair("c1", Box(3.0, 2.3, 0.45, 0.45)),))
+    with pytest.raises(BadInput, match="table 'dining table' and chair 'c1' interpenetrate"):
+        run("a dinner fork", method="grop", scene=scene, simulator="mujoco")
+    outside = replace(two_table_room(), tables=(
+        *two_table_room().tables, SceneTable("shelf", Box(5.9, 3.9, 0.5, 0.5))))
+    with pytest.raises(BadInput, match="table 'shelf' reaches outside the room"):
+        MujocoSimulator().check(outside)
+
+
+def test_an_object_too_large_for_the_gripper_is_bad_input(tmp_path: Path, capsys) -> None:
+    catalog = tmp_path / "tray.yaml"
+    catalog.write_text("objects:\n  - {name: serving tray, shape: box, size: [0.45, 0.3], "
+                       "height: 0.03}\n")
+    assert main(["run", "a serving tray", "--method", "grop", "--catalog", str(catalog),
+                 "--simulator", "mujoco"]) == 2
+    line = one_line_error(capsys)
+    assert "'serving tray'" in line and "too large for the gripper" in line
+    with pytest.raises(BadInput):
+        tableware(Placement("tray", 0, 0, 0, "box", (0.45, 0.3), None, "serving tray", 0.03))
+
+
+def test_missing_offscreen_rendering_names_the_apt_package(tmp_path: Path) -> None:
+    # GLX needs an X display, which this machine has not: the renderer cannot start,
+    # exactly as when the OSMesa or EGL library is missing.
+    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"} | {"MUJOCO_GL": "glx"}
+    out = subprocess.run([sys.executable, "-m", "llm_grop", "run", "a dinner fork",
+                          "--method", "grop", "--simulator", "mujoco", "--table-image",
+                          str(tmp_path / "t.png")], capture_output=True, text=True, env=env,
+                         timeout=120)
+    assert out.returncode == 2
+    lines = [line for line in out.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and "Traceback" not in out.stderr
+    assert "libosmesa6" in lines[0]
+    assert not (tmp_path / "t.png").exists()
+
+
+def test_pictures_need_a_3d_simulator(capsys) -> None:
+    assert main(["run", "a dinner fork", "--method", "grop", "--table-image", "x.png"]) == 2
+    assert "needs --simulator mujoco" in one_line_error(capsys)
+
+
+def test_video_must_be_mp4(capsys, tmp_path: Path) -> None:
+    assert main(["run", "a dinner fork", "--method", "grop", "--simulator", "mujoco",
+                 "--video", str(tmp_path / "v.gif")]) == 2
+    assert ".mp4" in one_line_error(capsys)
