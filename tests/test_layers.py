@@ -32,6 +32,7 @@ FORBIDDEN: dict[str, set[str]] = {
                "simulation", "methods", "llm"},
     "api": {"experiment", "cli", "evaluation", "render"},
     "experiment": {"cli"},
+    "env": {"evaluation", "experiment", "api", "cli", "methods"},
 }
 #: What a package marked ``*`` may still import.
 ALLOWED_BELOW = {"world": {"errors"}, "geometry": {"errors", "world"}}

@@ -20,7 +20,7 @@ from llm_grop.errors import BadInput
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import PlanningContext
-from llm_grop.simulation.mujoco.simulator import MujocoSimulator
+from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
 from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.world.arrangement import Placement
 from llm_grop.world.catalog import Catalog
@@ -44,8 +44,14 @@ def _plan(scene: Scene, *placements: Placement) -> tuple[Plan, Navigator]:
                       configurations=1), nav
 
 
+#: Without the authors' arrival noise (0.03 m² per axis), which makes a lucky seed part of
+#: any test that expects success.
+EXACT = MujocoOptions(nav_noise_var_m2=0.0)
+
+
 def test_one_object_episode_succeeds() -> None:
-    result = run("a dinner plate", method="grop", seed=0, chairs=0, simulator="mujoco")
+    result = run("a dinner plate", method="grop", seed=0, chairs=0,
+                 simulator=MujocoSimulator(EXACT))
     assert result.success and result.simulator == "mujoco"
     (plate,) = result.final.placements
     planned = result.plan.configuration[0]
@@ -70,7 +76,7 @@ def test_lid_settles_on_the_mug_and_bread_on_its_plate() -> None:
     plan, nav = _plan(scene, _item("mug", 0.2, 0.0), _item("mug lid", 0.2, 0.0, on="mug"),
                       _item("dinner plate", -0.15, 0.0),
                       _item("bread", -0.15, 0.0, on="dinner plate"))
-    ex = MujocoSimulator().execute(plan, scene, seeds.stream(1, "simulator"), replan=nav)
+    ex = MujocoSimulator(EXACT).execute(plan, scene, seeds.stream(1, "simulator"), replan=nav)
     final = {p.name: p for p in ex.final}
     assert final["mug lid"].on == "mug"
     assert final["bread"].on == "dinner plate"
@@ -90,7 +96,7 @@ def test_a_chair_on_the_path_is_a_contact_a_failure_and_a_replan() -> None:
     chair = Chair("surprise", Box(mid[0], mid[1], 0.45, 0.45, heading))
     real = scene.with_chairs((chair,))
     nav = Navigator(real, real.robot.base_radius_m)
-    ex = MujocoSimulator().execute(plan, real, seeds.stream(0, "simulator"), replan=nav)
+    ex = MujocoSimulator(EXACT).execute(plan, real, seeds.stream(0, "simulator"), replan=nav)
     first = ex.steps[0]
     assert first.action == "navigate" and not first.ok
     assert "contact with chair 'surprise'" in first.note
@@ -101,7 +107,7 @@ def test_a_chair_on_the_path_is_a_contact_a_failure_and_a_replan() -> None:
 
 
 def test_table_render_shows_the_table_and_the_plate(tmp_path: Path) -> None:
-    sim = MujocoSimulator()
+    sim = MujocoSimulator(EXACT)
     run("a dinner plate", method="grop", seed=0, chairs=0, simulator=sim)
     image = sim.picture("table").astype(float)
     r, g, b = image[..., 0], image[..., 1], image[..., 2]

@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib
+import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -79,6 +80,29 @@ def draw_run(result: RunResult, path: str | Path, *, title: str | None = None) -
         raise BadInput(f"image {path}: only PNG pictures are made; use a name ending in .png")
     with matplotlib.rc_context(STYLE):
         save_png(_figure(result, title), path)
+
+
+def room_image(scene: Scene, robot: Pose2D, objects: dict[str, tuple[float, float]],
+               size: tuple[int, int] = (160, 120)) -> np.ndarray:
+    """An RGB image (height x width x 3, uint8) of the room from above: furniture, the
+    robot at ``robot`` and each object as a dot at its room-frame ``(x, y)`` (metres)."""
+    width, height = size
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=(width / 100, height / 100), dpi=100, facecolor=BACKGROUND)
+        canvas = FigureCanvasAgg(fig)
+        ax = fig.add_axes((0, 0, 1, 1))
+        _draw_room(ax, scene, [])
+        for t in ax.texts:
+            t.set_visible(False)
+        _base(ax, robot, scene.robot.base_radius_m, PATH_OK, 0.35, 6)
+        for x, y in objects.values():
+            ax.add_patch(Circle((x, y), 0.05, facecolor="#1f4e9c", edgecolor="white",
+                                linewidth=0.5, zorder=7))
+        ax.set_xlim(-0.1, scene.width + 0.1)
+        ax.set_ylim(-0.1, scene.depth + 0.1)
+        ax.set_axis_off()
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
 
 def _figure(result: RunResult, title: str | None) -> Figure:

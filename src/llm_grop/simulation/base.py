@@ -14,7 +14,9 @@ from typing import Protocol
 
 import numpy as np
 
-from llm_grop.world.plan import Execution, Plan, Point
+from llm_grop.world.arrangement import Placement
+from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point
 from llm_grop.world.scene import Scene
 
 
@@ -40,4 +42,50 @@ class Simulator(Protocol):
         ``final`` holds every object that reached the table where it really ended up
         (table frame), and each successful ``place`` step's ``pose`` is where it landed.
         """
+        ...
+
+
+class Session(Protocol):
+    """One episode driven one action at a time, for agents that choose their own actions
+    (the Gymnasium environment). A simulator that offers it has a method
+    ``session(scene, items, rng, *, replan) -> Session``.
+
+    Poses are room frame unless said otherwise (metres, radians); each action returns the
+    :class:`~llm_grop.world.plan.ExecutedStep` it produced.
+    """
+
+    @property
+    def time_s(self) -> float:
+        """Simulated seconds so far."""
+        ...
+
+    @property
+    def held(self) -> str | None:
+        """The object in the hand, if any."""
+        ...
+
+    def robot_pose(self) -> Pose2D:
+        """The base's pose."""
+        ...
+
+    def object_poses(self) -> dict[str, tuple[float, float, float, float]]:
+        """Every object's bottom centre ``(x, y, z)`` and yaw."""
+        ...
+
+    def navigate(self, goal: Pose2D) -> ExecutedStep:
+        """One attempt to drive to ``goal`` along a path the robot plans itself."""
+        ...
+
+    def pick(self, name: str) -> ExecutedStep:
+        """One attempt to pick ``name`` from where the robot stands."""
+        ...
+
+    def place(self, name: str, x: float, y: float, yaw: float, on: str | None = None
+              ) -> ExecutedStep:
+        """One attempt to put the held ``name`` at ``(x, y, yaw)`` in the table frame, on
+        the object ``on`` (``None``: the table)."""
+        ...
+
+    def final(self) -> tuple[Placement, ...]:
+        """Every object on the target table, where it is (table frame)."""
         ...

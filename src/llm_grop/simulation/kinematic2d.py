@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,10 +27,13 @@ from llm_grop.geometry.motion import leg_duration_s, path_length_m, path_prefix
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
-from llm_grop.world.arrangement import Placement
+from llm_grop.world.arrangement import Item, Placement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point, Step
 from llm_grop.world.scene import Scene
+
+if TYPE_CHECKING:
+    from llm_grop.simulation.kinematic2d_session import Kinematic2DSession
 
 log = logging.getLogger(__name__)
 
@@ -65,6 +70,13 @@ class Kinematic2D:
 
     def __init__(self, options: Kinematic2DOptions | None = None) -> None:
         self.options = options or Kinematic2DOptions()
+
+    def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
+                replan: PathPlanner) -> Kinematic2DSession:
+        """A new episode driven one action at a time (the Gymnasium environment uses it)."""
+        from llm_grop.simulation.kinematic2d_session import Kinematic2DSession
+
+        return Kinematic2DSession(self.options, scene, items, rng, replan)
 
     def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
                 replan: PathPlanner) -> Execution:

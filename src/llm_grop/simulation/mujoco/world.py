@@ -193,16 +193,20 @@ class World:
         return out
 
     # -- the base ---------------------------------------------------------------------
-    def drive(self, path: Sequence[Point], heading: float, *, stop_on_contact: bool = True
-              ) -> Drive:
+    def drive(self, path: Sequence[Point], heading: float, *, stop_on_contact: bool = True,
+              holonomic: bool = False) -> Drive:
         """Follow ``path`` (room frame), turning in place between segments and to
-        ``heading`` at the end; with ``stop_on_contact``, stop at the first contact with
-        furniture (contacts present at the start are overlooked)."""
+        ``heading`` at the end (``holonomic``: sliding and turning at once, for short
+        corrections); with ``stop_on_contact``, stop at the first contact with furniture
+        (contacts present at the start are overlooked)."""
         t0 = self.d.time
         here = self.base_pose()
         yaw = float(self.d.qpos[self.base_qpos[2]])
-        refs = _references(here, yaw, path, heading, self.speed, self.turn_speed,
-                           self.m.opt.timestep * CONTROL_STEPS)
+        dt = self.m.opt.timestep * CONTROL_STEPS
+        if holonomic:
+            refs = _slide(here, yaw, path[-1], heading, self.speed, self.turn_speed, dt)
+        else:
+            refs = _references(here, yaw, path, heading, self.speed, self.turn_speed, dt)
         ignore = self.touching_furniture()
         passed: list[Point] = [(here.x, here.y)]
         note = ""
@@ -286,6 +290,16 @@ def _furniture_label(geom: str) -> str:
     if kind in ("top", "leg"):
         return f"table {name!r}"
     return geom
+
+
+def _slide(start: Pose2D, yaw: float, goal: Point, heading: float, speed: float,
+           turn_speed: float, dt: float) -> list[tuple[float, float, float]]:
+    """Base references sliding straight to ``goal`` while turning to ``heading``."""
+    end = yaw + wrap(heading - yaw)
+    seconds = max(math.dist((start.x, start.y), goal) / speed, abs(end - yaw) / turn_speed)
+    n = max(1, math.ceil(seconds / dt))
+    return [(start.x + (goal[0] - start.x) * k / n, start.y + (goal[1] - start.y) * k / n,
+             yaw + (end - yaw) * k / n) for k in range(1, n + 1)]
 
 
 def _references(start: Pose2D, yaw: float, path: Sequence[Point], heading: float,

@@ -1,0 +1,99 @@
+"""The Gymnasium environment over both simulators."""
+
+from __future__ import annotations
+
+import warnings
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import llm_grop.env
+from llm_grop.env.dining import NAVIGATE, PICK, PLACE, DiningRoomEnv
+from llm_grop.errors import BadInput
+from llm_grop.planning.grop import build_plan, choose
+from llm_grop.planning.navigation import Navigator
+from llm_grop.planning.utility import PlanningContext
+from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
+from llm_grop.world.arrangement import Configuration, Placement
+
+SIMULATORS = ["kinematic2d", "mujoco"]
+
+
+@pytest.mark.parametrize("simulator", SIMULATORS)
+def test_passes_gymnasiums_env_checker(simulator: str) -> None:
+    env = gymnasium.make(llm_grop.env.ENV_ID, simulator=simulator, camera=True,
+                         render_mode="rgb_array", objects=["dinner fork", "mug"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # advice about normalised Box actions
+        check_env(env.unwrapped, skip_render_check=False)
+    obs, _ = env.reset(seed=5)
+    assert obs["image"].shape == (120, 160, 3) and obs["image"].std() > 5
+    assert env.render().shape == (120, 160, 3)
+
+
+@pytest.mark.parametrize("simulator", ["kinematic2d",
+                                       MujocoSimulator(MujocoOptions(nav_noise_var_m2=0.0))],
+                         ids=SIMULATORS)
+def test_a_plan_driven_through_the_environment_sets_the_table(simulator) -> None:  # type: ignore[no-untyped-def]
+    env = DiningRoomEnv(["dinner plate"], simulator=simulator, chairs=0)
+    obs, _ = env.reset(seed=2)
+    assert obs["held"] == 1 and obs["on_table"].tolist() == [0]
+    scene = env.episode_scene
+    assert scene is not None
+    ctx = PlanningContext(scene, env.items)
+    plate = env.items[0].spec
+    target = Placement("dinner plate", 0.0, -0.1, 0.0, plate.shape, plate.size, None,
+                       plate.name, plate.height)
+    plan = build_plan(ctx, choose(ctx, [Configuration((target,))]),
+                      Navigator(scene, scene.robot.base_radius_m), seed=2, configurations=1)
+    total, terminated = 0.0, False
+    for step in plan.steps:
+        if step.action == "navigate":
+            assert step.goal is not None
+            action = {"action": NAVIGATE, "object": 0,
+                      "pose": np.array(step.goal.as_list(), np.float32)}
+        elif step.action == "pick":
+            action = {"action": PICK, "object": 0, "pose": np.zeros(3, np.float32)}
+        else:
+            action = {"action": PLACE, "object": 0,
+                      "pose": np.array([target.x, target.y, target.yaw], np.float32)}
+        for _ in range(3):  # an agent retries a failed action, as the simulators do
+            obs, reward, terminated, truncated, info = env.step(action)
+            total += reward
+            assert not truncated
+            if info["ok"]:
+                break
+        assert info["ok"], info
+    assert terminated and obs["on_table"].tolist() == [1] and obs["held"] == 1
+    assert 0.0 < total < 1.0  # +1 for the plate, minus its time
+
+
+def test_actions_that_cannot_be_done_fail_without_ending_the_episode() -> None:
+    env = DiningRoomEnv(["dinner fork"], chairs=0)
+    env.reset(seed=1)
+    _, _, terminated, _, info = env.step({"action": PLACE, "object": 0,
+                                          "pose": np.zeros(3, np.float32)})
+    assert not info["ok"] and "does not hold" in info["note"] and not terminated
+    _, _, _, _, info = env.step({"action": PICK, "object": 0, "pose": np.zeros(3, np.float32)})
+    assert not info["ok"]  # out of reach from the start
+    _, _, _, _, info = env.step({"action": NAVIGATE, "object": 0,
+                                 "pose": np.array([4.0, 3.0, 0.0], np.float32)})
+    assert not info["ok"] and info["note"] == "no path"  # inside the dining table
+
+
+def test_same_seed_same_episode() -> None:
+    env = DiningRoomEnv(task=8)
+    a, _ = env.reset(seed=7)
+    b, _ = env.reset(seed=7)
+    c, _ = env.reset(seed=8)
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+    assert not np.array_equal(a["objects"], c["objects"])
+
+
+def test_bad_settings_are_bad_input() -> None:
+    with pytest.raises(BadInput, match="render_mode"):
+        DiningRoomEnv(render_mode="human")
+    with pytest.raises(BadInput, match="unknown"):
+        DiningRoomEnv(simulator="nope")
