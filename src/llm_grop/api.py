@@ -77,6 +77,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         catalog_files: Sequence[str | PathLike[str]] = (),
         options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
         simulator: str | Simulator = DEFAULT_SIMULATOR, planner: GropOptions | None = None,
+        feasibility: str = "default",
         tasks: Mapping[int, Task] | None = None,
         on_event: Callable[[str], None] | None = None) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
@@ -89,12 +90,14 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     ``method`` is one of :func:`available_methods` and ``simulator`` one of
     :func:`available_simulators` or a simulator object, such as a
     :class:`~llm_grop.simulation.mujoco.simulator.MujocoSimulator` with options (the plan
-    is the same whichever executes it); ``tasks``
+    is the same whichever executes it); ``feasibility`` names the planner's belief of how
+    often actions succeed (``default``, or ``mujoco`` as fitted in 3D); ``tasks``
     replaces the paper's Table I for ``task``. The same seed gives the same run.
     """
     # Planning pulls in OMPL and scipy; import them only when a run needs them.
     from llm_grop.methods.base import EpisodeInput
     from llm_grop.methods.episode import run_episode
+    from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.simulation.scenario import prepare_episode
     from llm_grop.world.scene_file import load_scene
@@ -103,6 +106,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     text, items = resolve_items(request, task, catalog, tasks)
     chosen = get_method(method)
     sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
+    feasibility_profile(feasibility)  # an unknown profile is reported before any work
     base = scene if isinstance(scene, Scene) else load_scene(scene)
     for k, source in enumerate(base.sources):
         kind = re.sub(r"\s+\d+$", "", source.object)
@@ -121,4 +125,5 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
     inp = EpisodeInput(text, items, episode.target_top, seed, catalog, log,
                        options or ArrangeOptions(), on_event)
-    return run_episode(chosen, inp, episode, task=task, simulator=sim, planner=planner)
+    return run_episode(chosen, inp, episode, task=task, simulator=sim, planner=planner,
+                       model=feasibility)

@@ -44,6 +44,7 @@ STAGES: dict[str, int] = {
     "standing": 14,
     "ompl": 15,
     "simulator": 16,
+    "calibration": 17,
 }
 
 

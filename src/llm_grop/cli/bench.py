@@ -9,7 +9,13 @@ from typing import Any
 import click
 
 from llm_grop.cli.logs import VERBOSE
-from llm_grop.cli.options import EPILOG, SIMULATOR, llm_flags_without_record, llm_settings
+from llm_grop.cli.options import (
+    EPILOG,
+    FEASIBILITY,
+    SIMULATOR,
+    llm_flags_without_record,
+    llm_settings,
+)
 from llm_grop.errors import BadInput
 
 
@@ -101,6 +107,7 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
               help="Chairs sampled near the table in every trial [default: the scene's own, "
                    "else 1].")
 @SIMULATOR
+@FEASIBILITY
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
 @click.option("--task-file", "task_files", multiple=True,
@@ -110,7 +117,8 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 @llm_flags_without_record
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
-          seed: int, scene_path: Path | None, chairs: int | None, simulator: str, w: float,
+          seed: int, scene_path: Path | None, chairs: int | None, simulator: str, feasibility: str,
+          w: float,
           task_files: tuple[Path, ...], no_images: bool,
           catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
     """Run the paper's experiment: tasks x trials x methods, rated 1-5 (paper §IV)."""
@@ -129,6 +137,7 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     from llm_grop.experiment.trial import TrialSettings
     from llm_grop.llm.registry import BACKENDS, create_llm
     from llm_grop.methods.registry import get_method
+    from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.world.contract import TrialRow
     from llm_grop.world.scene_file import load_scene
@@ -141,6 +150,7 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     # Unknown or broken components are reported before any trial runs, and their names
     # are written canonically into the experiment's identity.
     sim = create_simulator(simulator)
+    feasibility_profile(feasibility)
     simulator = sim.name
     if not no_images and hasattr(sim, "picture"):
         from llm_grop.simulation.mujoco.render import check_rendering
@@ -157,7 +167,8 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
         backend=backend, llm_options=llm_options, arrange=options,
         scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,
         task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
-        images=None if no_images else str(out_dir / "images"), simulator=simulator)
+        images=None if no_images else str(out_dir / "images"), simulator=simulator,
+        feasibility=feasibility)
     exp = Experiment(tasks, trials, methods, settings, seed)
     console = Console(stderr=True)
     progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),

@@ -72,6 +72,11 @@ def check_outputs(**paths: Path | None) -> None:
             raise BadInput(f"{name} {path}: directory {parent} is not writable")
 
 
+FEASIBILITY = click.option(
+    "--feasibility", default="default", show_default=True,
+    help="The planner's feasibility profile: default (assumed) or mujoco (fitted in 3D).")
+
+
 SIMULATOR = click.option(
     "--simulator", default=DEFAULT_SIMULATOR, show_default=True,
     help="The simulator that executes the plan (see `llm-grop plugins`).")

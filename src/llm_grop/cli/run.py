@@ -10,6 +10,7 @@ import click
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
+    FEASIBILITY,
     SIMULATOR,
     check_outputs,
     check_request,
@@ -33,6 +34,7 @@ from llm_grop.errors import BadInput
 @click.option("--chairs", type=click.IntRange(0),
               help="Chairs to sample near the table [default: the scene's own, else 1].")
 @SIMULATOR
+@FEASIBILITY
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -48,7 +50,8 @@ from llm_grop.errors import BadInput
 @llm_flags
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
-        chairs: int | None, simulator: str, w: float, json_path: Path | None,
+        chairs: int | None, simulator: str, feasibility: str, w: float,
+        json_path: Path | None,
         image_path: Path | None, table_image: Path | None, room_image: Path | None,
         video_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
         quiet: bool, **flags: Any) -> None:
@@ -75,7 +78,8 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
         result = api_run(request, task=task, method=method, scene=scene_path, chairs=chairs,
                          seed=seed, llm=flags["backend"], llm_options=llm_options,
                          catalog_files=catalog_files, options=options, record=record_path,
-                         planner=GropOptions(w=w), simulator=sim, on_event=on_event)
+                         planner=GropOptions(w=w), simulator=sim, feasibility=feasibility,
+                         on_event=on_event)
     if json_path is not None:
         write_json(json_path, run_to_dict(result))
     if image_path is not None:

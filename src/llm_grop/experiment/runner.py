@@ -102,6 +102,8 @@ def identity(exp: Experiment) -> dict[str, Any]:
         "chairs": s.chairs,
         "w": s.w,
         "simulator": s.simulator,
+        # Absent for the default, so directories written before profiles existed resume.
+        **({"feasibility": s.feasibility} if s.feasibility != "default" else {}),
         "plugins": _plugin_origins(exp),
         "seed": exp.seed,
         "tasks": hashlib.sha256(tasks).hexdigest()[:16] + (

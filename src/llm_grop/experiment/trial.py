@@ -62,8 +62,8 @@ class TrialSettings:
 
     ``scene``: a scene YAML path or ``None`` for the packaged room; ``chairs``: chairs per
     episode; ``w``: GROP's utility weight, seconds; ``simulator``: the simulator that
-    executes every plan; ``images``: where to draw each trial's final table (``None``: no
-    pictures).
+    executes every plan; ``feasibility``: the planner's feasibility profile; ``images``:
+    where to draw each trial's final table (``None``: no pictures).
     """
 
     backend: str = "replay"
@@ -76,6 +76,7 @@ class TrialSettings:
     catalog_files: tuple[str, ...] = ()
     images: str | None = None
     simulator: str = DEFAULT_SIMULATOR
+    feasibility: str = "default"
 
 
 class TrialRunner:
@@ -106,7 +107,7 @@ class TrialRunner:
                          chairs=self.settings.chairs, seed=spec.seed,
                          llm=llm_log if llm_log is not None else "replay", catalog=self.catalog,
                          options=self.settings.arrange, planner=GropOptions(w=self.settings.w),
-                         simulator=self.simulator)
+                         simulator=self.simulator, feasibility=self.settings.feasibility)
         except Infeasible as exc:
             log.info("task %d trial %d %s: infeasible: %s", spec.task, spec.trial,
                      spec.method, exc)

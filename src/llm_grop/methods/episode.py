@@ -13,7 +13,7 @@ from dataclasses import replace
 from llm_grop import seeds
 from llm_grop.arrangement.sampling import violations
 from llm_grop.methods.base import EpisodeInput, Method
-from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY, FeasibilityModel
+from llm_grop.planning.feasibility import FeasibilityModel, feasibility_profile
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import GropOptions, PlanningContext
@@ -27,11 +27,12 @@ log = logging.getLogger(__name__)
 
 
 def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | None,
-                simulator: Simulator, model: FeasibilityModel = DEFAULT_FEASIBILITY,
+                simulator: Simulator, model: FeasibilityModel | str = "default",
                 planner: GropOptions | None = None) -> RunResult:
     """Arrange, plan and execute in ``scene`` (its chairs are sensed at planning time).
 
-    ``model`` is the planner's belief of how often actions succeed; ``simulator`` decides
+    ``model`` is the planner's belief of how often actions succeed, a model or the name of
+    a profile (:func:`~llm_grop.planning.feasibility.feasibility_profile`); ``simulator`` decides
     what really happens.
 
     Planning time counts the arrangement's computation without LLM calls, GROP and the
@@ -45,7 +46,9 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     proposal = method.propose(inp)
     say(f"planning for {len(proposal.configurations)} configuration(s)")
     t0 = time.perf_counter()
-    ctx = PlanningContext(scene, inp.items, model, planner)
+    profile = model if isinstance(model, str) else "custom"
+    belief = feasibility_profile(model) if isinstance(model, str) else model
+    ctx = PlanningContext(scene, inp.items, belief, planner)
     cand = choose(ctx, proposal.configurations, method.standing,
                   seeds.stream(inp.seed, "standing"), method.best_of_all)
     navigator = Navigator(scene, scene.robot.base_radius_m,
@@ -61,7 +64,8 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     return RunResult(method=method.name, task=task, seed=inp.seed, request=inp.request,
                      planned=planned, plan=plan, execution=execution,
                      final=final_arrangement(planned, execution),
-                     planning_time_s=planning_s, scene=scene, simulator=simulator.name)
+                     planning_time_s=planning_s, scene=scene, simulator=simulator.name,
+                     feasibility=profile)
 
 
 def final_arrangement(planned: Arrangement, execution: Execution) -> Arrangement:

@@ -12,16 +12,24 @@ the :class:`FeasibilityModel` protocol, so a learned model can replace them.
 * **Manipulation** (a pick or a place) at horizontal reach ``r`` (base centre to object,
   metres) succeeds with probability ``manip_max`` for ``reach_min <= r <= knee * reach_max``,
   falls smoothly (cosine) to 0 at ``reach_max``, and is 0 beyond it or below ``reach_min``.
+
+Named profiles of the parametric model live in ``planning/feasibility.yaml``: ``default``
+(assumed, the paper's black box) and ``mujoco`` (fitted to measurements in the 3D world by
+``benchmarks/calibrate_mujoco.py``). Choose one with ``--feasibility NAME``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from importlib import resources
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from pydantic import BaseModel, ConfigDict, Field, RootModel
 
+from llm_grop.errors import BadInput
+from llm_grop.world.datafile import load_yaml_model
 from llm_grop.world.robot import Robot
 
 Floats = NDArray[np.float64]
@@ -49,6 +57,8 @@ class ParametricFeasibility:
         nav_scale_m: width of the navigation sigmoid, metres.
         manip_max: success probability of a pick or place well within reach.
         knee: fraction of the arm's reach beyond which manipulation gets harder.
+        reach_max_m: reach, metres, at which manipulation stops succeeding (``None``: the
+            robot's ``reach_max_m``).
     """
 
     nav_max: float = 0.98
@@ -56,6 +66,7 @@ class ParametricFeasibility:
     nav_scale_m: float = 0.02
     manip_max: float = 0.97
     knee: float = 0.7
+    reach_max_m: float | None = None
 
     def navigation(self, clearance_m: ArrayLike) -> Floats:
         c = np.asarray(clearance_m, dtype=float)
@@ -64,11 +75,50 @@ class ParametricFeasibility:
 
     def manipulation(self, reach_m: ArrayLike, robot: Robot) -> Floats:
         r = np.asarray(reach_m, dtype=float)
-        knee = self.knee * robot.reach_max_m
-        t = np.clip((r - knee) / (robot.reach_max_m - knee), 0.0, 1.0)
+        reach = self.reach_max_m or robot.reach_max_m
+        knee = self.knee * reach
+        t = np.clip((r - knee) / (reach - knee), 0.0, 1.0)
         p = self.manip_max * 0.5 * (1.0 + np.cos(np.pi * t))
-        return np.where((r < robot.reach_min_m) | (r >= robot.reach_max_m), 0.0, p)
+        return np.where((r < robot.reach_min_m) | (r >= reach), 0.0, p)
 
 
 #: The model every planner and the simulator use unless given another.
 DEFAULT_FEASIBILITY = ParametricFeasibility()
+
+
+class _ProfileModel(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+    description: str = ""
+    nav_max: float = Field(gt=0, le=1)
+    nav_mid_m: float
+    nav_scale_m: float = Field(gt=0)
+    manip_max: float = Field(gt=0, le=1)
+    knee: float = Field(gt=0, lt=1)
+    reach_max_m: float | None = Field(None, gt=0)
+
+
+class _ProfilesModel(RootModel[dict[str, _ProfileModel]]):
+    pass
+
+
+def _profiles() -> dict[str, _ProfileModel]:
+    text = resources.files("llm_grop.planning").joinpath("feasibility.yaml").read_text(
+        encoding="utf-8")
+    return load_yaml_model(text, "feasibility.yaml", _ProfilesModel, "", "").root
+
+
+def profile_names() -> list[str]:
+    """Names of the packaged feasibility profiles."""
+    return sorted(_profiles())
+
+
+def feasibility_profile(name: str) -> ParametricFeasibility:
+    """The packaged profile called ``name``; :class:`BadInput` for an unknown one."""
+    profiles = _profiles()
+    if name not in profiles:
+        raise BadInput(f"--feasibility: unknown profile {name!r}; choose from "
+                       f"{', '.join(sorted(profiles))}")
+    p = profiles[name]
+    return ParametricFeasibility(p.nav_max, p.nav_mid_m, p.nav_scale_m, p.manip_max, p.knee,
+                                 p.reach_max_m)

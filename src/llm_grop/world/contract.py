@@ -190,6 +190,8 @@ class RunDoc(Doc):
     plan: PlanDoc
     planned: ArrangementDoc = Field(description="the arrangement the plan realises")
     simulator: Name = Field(description="the simulator that executed the plan")
+    feasibility: Name | None = Field(None, description="the planner's feasibility profile "
+                                                       "(absent: default)")
     scene: SceneFile = Field(description="the episode's room, with its sampled chairs and "
                                          "object starts, in the scene file's layout")
 

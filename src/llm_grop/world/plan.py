@@ -129,8 +129,8 @@ class Execution:
 class RunResult:
     """One episode (the contract's run JSON): the planned arrangement, the plan, its
     execution, the final arrangement, planning time in seconds (LLM calls excluded), the
-    scene with the chairs that were sensed, and the name of the simulator that executed
-    the plan."""
+    scene with the chairs that were sensed, the name of the simulator that executed
+    the plan, and the planner's feasibility profile."""
 
     method: str
     task: int | None
@@ -143,6 +143,7 @@ class RunResult:
     planning_time_s: float
     scene: Scene
     simulator: str
+    feasibility: str = "default"
 
     @property
     def success(self) -> bool:
