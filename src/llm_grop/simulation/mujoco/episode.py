@@ -97,22 +97,23 @@ class Episode:
         return settle.ok
 
     def path_to(self, goal: Pose2D, planned: tuple[tuple[float, float], ...], first: bool
-              ) -> tuple[tuple[float, float], ...]:
+                ) -> tuple[tuple[float, float], ...]:
         """The points to drive through to ``goal``: the planned path on a first attempt
-        (from a noisy arrival the base first hops to its start), else a new one; when the
-        base stands where the planner cannot start, via the last standing goal."""
+        (from a noisy arrival the base first hops to its start), else a new one. When the
+        base stands where the planner cannot start (against furniture), the path starts
+        at the nearest free spot around it, up to 30 cm away."""
         if first and planned:
             return planned
         here = self.w.base_pose()
         seed = int(self.rng.integers(2**31))
-        path = self.replan.plan((here.x, here.y), (goal.x, goal.y), seed=seed)
-        if path:
-            return path[1:]
-        last = self.goal
-        if last is None or math.dist((last.x, last.y), (here.x, here.y)) < 1e-6:
-            return ()
-        path = self.replan.plan((last.x, last.y), (goal.x, goal.y), seed=seed)
-        return path if path else ()
+        for radius in (0.0, 0.1, 0.2, 0.3):
+            for k in range(8 if radius else 1):
+                a = 2 * math.pi * k / 8
+                start = (here.x + radius * math.cos(a), here.y + radius * math.sin(a))
+                path = self.replan.plan(start, (goal.x, goal.y), seed=seed)
+                if path:
+                    return path if radius else path[1:]
+        return ()
 
     def navigate(self, step: Step) -> None:
         assert step.goal is not None

@@ -31,21 +31,28 @@ _APT = {"osmesa": "libosmesa6", "egl": "libegl1 libgl1-mesa-dri"}
 def check_rendering() -> None:
     """:class:`BadInput` naming the apt package to install when offscreen rendering is
     not available (checked before any work, by opening a tiny GL context)."""
-    backend = os.environ.get("MUJOCO_GL", "").lower()
+    renderer = new_renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), (8, 8))
+    try:
+        renderer.render()
+    finally:
+        renderer.close()
+
+
+def new_renderer(model: mujoco.MjModel, size: tuple[int, int]) -> mujoco.Renderer:
+    """A renderer of ``size`` (width, height) pixels; :class:`BadInput` naming what to
+    install when no offscreen OpenGL is available."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # GLFW warns before it fails
-            renderer = mujoco.Renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 8, 8)
-            try:
-                renderer.render()
-            finally:
-                renderer.close()
+            return mujoco.Renderer(model, height=size[1], width=size[0])
     except Exception as exc:  # noqa: BLE001 - any GL failure means the same to the user
+        backend = os.environ.get("MUJOCO_GL", "").lower()
         if backend in _APT:
-            need = f"apt package {_APT[backend]} (MUJOCO_GL={backend})"
+            need = f"the apt package {_APT[backend]} (MUJOCO_GL={backend})"
         else:
-            need = "apt package libosmesa6 (or libegl1 and libgl1-mesa-dri for MUJOCO_GL=egl)"
-        raise BadInput(f"offscreen rendering is not available: install the {need} "
+            need = ("the apt package libosmesa6 (or libegl1 and libgl1-mesa-dri), and set "
+                    "MUJOCO_GL=osmesa or egl before mujoco is first imported")
+        raise BadInput(f"offscreen rendering is not available: install {need} "
                        f"({type(exc).__name__})") from None
 
 
@@ -58,7 +65,7 @@ def picture(world: World, view: View, size: tuple[int, int] | None = None) -> np
     """
     m = world.m
     width, height = size or (m.vis.global_.offwidth, m.vis.global_.offheight)
-    renderer = mujoco.Renderer(m, height=height, width=width)
+    renderer = new_renderer(m, (width, height))
     try:
         return _render(renderer, world, view)
     finally:
@@ -115,7 +122,7 @@ class VideoRecorder:
 
     def __call__(self, world: World) -> None:
         if self._renderer is None:
-            self._renderer = mujoco.Renderer(world.m, height=self.size[1], width=self.size[0])
+            self._renderer = new_renderer(world.m, self.size)
         self._writer.send(np.ascontiguousarray(_render(self._renderer, world, "room")))
         self.frames += 1
 

@@ -25,6 +25,8 @@ from llm_grop.world.scene import Scene
 
 #: Physics steps between two control updates (0.02 s at the default time step).
 CONTROL_STEPS = 10
+#: How far, metres, the base moves before furniture it touched at the start counts again.
+CLEAR_M = 0.3
 #: A body is "on" a surface when its bottom is within this height of the surface, metres.
 REST_TOL_M = 0.015
 
@@ -153,12 +155,12 @@ class World:
 
     # -- contacts ---------------------------------------------------------------------
     def collisions(self, *, arm_only: bool = False, at_surface: bool = False,
-                   ignore: Sequence[int] = ()) -> str:
+                   ignore: Sequence[int] = (), ignore_bodies: Sequence[int] = ()) -> str:
         """A description of the first contact between the robot (or what it holds) and
         furniture, else ``""``. With ``arm_only`` the base does not count (it stands
         still while the arm works, perhaps against a table); with ``at_surface`` neither
         do the fingers and the held object (they work at a table top); ``ignore`` lists
-        furniture geoms to overlook."""
+        furniture geoms, ``ignore_bodies`` furniture bodies, to overlook."""
         n = self.d.ncon
         if n == 0:
             return ""
@@ -173,9 +175,9 @@ class World:
               (mover[geoms[:, 1]] & wm.furniture[geoms[:, 0]])
         for k in np.flatnonzero(hit):
             a, b = (int(g) for g in geoms[k])
-            if a in ignore or b in ignore:
-                continue
             f = b if wm.furniture[b] else a
+            if f in ignore or int(self.m.geom_bodyid[f]) in ignore_bodies:
+                continue
             return f"contact with {_furniture_label(self.m.geom(f).name)}"
         return ""
 
@@ -207,18 +209,21 @@ class World:
             refs = _slide(here, yaw, path[-1], heading, self.speed, self.turn_speed, dt)
         else:
             refs = _references(here, yaw, path, heading, self.speed, self.turn_speed, dt)
-        ignore = self.touching_furniture()
+        # Furniture the base already touches (after a bump, or resting against a table it
+        # works at) is overlooked until the base has moved clear of it.
+        bodies = {int(self.m.geom_bodyid[g]) for g in self.touching_furniture()}
         passed: list[Point] = [(here.x, here.y)]
         note = ""
         for ref in refs:
             self.d.ctrl[self.base_ctrl] = ref
             mujoco.mj_step(self.m, self.d, nstep=CONTROL_STEPS)
             self._frame()
+            p = self.base_pose()
             if stop_on_contact:
-                note = self.collisions(ignore=ignore)
+                near = math.dist((here.x, here.y), (p.x, p.y)) < CLEAR_M
+                note = self.collisions(ignore_bodies=tuple(bodies) if near else ())
                 if note:
                     break
-            p = self.base_pose()
             if math.dist(passed[-1], (p.x, p.y)) > 0.05:
                 passed.append((p.x, p.y))
         if note:
