@@ -116,10 +116,10 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
                            f"did you mean {', '.join(map(repr, catalog.suggest(kind))) or '?'}")
     if chairs is None and not (base.chairs or base.chairs_listed):
         chairs = 1
-    episode = prepare_episode(base, items, seed, chairs=chairs)
     check = getattr(sim, "check", None)
     if check is not None:
-        check(episode, items)
+        check(base, items)
+    episode = prepare_episode(base, items, seed, chairs=chairs)
     log = None
     if chosen.uses_llm:
         log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)

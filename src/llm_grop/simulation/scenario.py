@@ -23,8 +23,11 @@ from llm_grop.world.geometry2d import Box
 from llm_grop.world.jsonio import rounded
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
 
-#: Radius of the disc an object occupies on a supply table while it waits, metres.
+#: Smallest radius of the disc an object occupies on a supply table while it waits, metres;
+#: larger objects take the disc round their footprint.
 OBJECT_RADIUS_M = 0.06
+#: Gap kept between two waiting objects' discs, metres.
+OBJECT_GAP_M = 0.01
 #: Clearance between a waiting object's disc and its table's edge, metres.
 EDGE_MARGIN_M = 0.05
 #: Extra clearance, beyond the base radius, between chairs and the robot's start, metres.
@@ -117,7 +120,8 @@ def _assign_sources(scene: Scene, items: Sequence[Item],
         if s is not None and s not in used:
             used.add(s)
             given[item.name] = ObjectSource(item.name, s.table, s.x, s.y)
-    taken = [(s.x, s.y) for s in given.values()]
+    radius = {i.name: _radius(i) for i in items}
+    taken = [(s.x, s.y, radius[n]) for n, s in given.items()]
     supply = scene.supply_tables
     out: list[ObjectSource] = []
     turn = 0
@@ -130,25 +134,33 @@ def _assign_sources(scene: Scene, items: Sequence[Item],
                              "besides the target")
         for j in range(len(supply)):
             table = supply[(turn + j) % len(supply)]
-            spot = _free_spot(scene, table, taken, rng)
+            spot = _free_spot(scene, table, taken, radius[item.name], rng)
             if spot is not None:
                 break
         else:
             names = ", ".join(repr(t.name) for t in supply)
             raise Infeasible(f"cannot fit {item.name!r} on the supply tables ({names})")
         turn += 1
-        taken.append(spot)
+        taken.append((*spot, radius[item.name]))
         out.append(ObjectSource(item.name, table.name, *spot))
     return tuple(out)
 
 
-def _free_spot(scene: Scene, table: SceneTable, taken: list[tuple[float, float]],
-               rng: np.random.Generator) -> tuple[float, float] | None:
+def _radius(item: Item) -> float:
+    """Radius, metres, of the disc round ``item``'s footprint (at least
+    :data:`OBJECT_RADIUS_M`)."""
+    sx, sy = item.spec.size
+    r = sx / 2 if item.spec.shape == "circle" else math.hypot(sx, sy) / 2
+    return max(OBJECT_RADIUS_M, r)
+
+
+def _free_spot(scene: Scene, table: SceneTable, taken: list[tuple[float, float, float]],
+               radius: float, rng: np.random.Generator) -> tuple[float, float] | None:
     """A random room-frame point on ``table``, within :data:`EDGE_BAND_M` of an edge the
-    robot can stand at, whose object disc is clear of the edge and of the discs at
-    ``taken``; ``None`` when none turns up."""
+    robot can stand at, whose object disc (``radius`` metres) is clear of the edge and of
+    the discs ``(x, y, radius)`` in ``taken``; ``None`` when none turns up."""
     box = table.box
-    inset = EDGE_MARGIN_M + OBJECT_RADIUS_M
+    inset = EDGE_MARGIN_M + radius
     hw, hd = box.width / 2 - inset, box.depth / 2 - inset
     if hw < 0 or hd < 0:
         return None
@@ -166,7 +178,8 @@ def _free_spot(scene: Scene, table: SceneTable, taken: list[tuple[float, float]]
             v = dv * (box.depth / 2 - min(box.depth / 2 - v * dv, EDGE_BAND_M))
             v = float(np.clip(v, -hd, hd))
         x, y = (rounded(c) for c in box.to_room(u, v))
-        if all(math.hypot(x - tx, y - ty) >= 2 * OBJECT_RADIUS_M for tx, ty in taken):
+        if all(math.hypot(x - tx, y - ty) >= radius + tr + OBJECT_GAP_M
+               for tx, ty, tr in taken):
             return (x, y)
     return None
 

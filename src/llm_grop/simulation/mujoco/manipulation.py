@@ -132,7 +132,7 @@ def _judged(w: World, t0: float, name: str, x: float, y: float, support: str) ->
     table_top = w.top_z(w.scene.target)
     if p.z < table_top - 0.05:
         return Attempt(False, w.d.time - t0, "the object fell off the table")
-    if p.tilt > MAX_TILT_RAD:
+    if p.tilt > MAX_TILT_RAD and w.wm.objects[name].style != "berry":  # no upright
         return Attempt(False, w.d.time - t0, f"the object tipped over ({p.tilt:.2f} rad)")
     under = w.support_of(name)
     wanted = support if support in w.wm.objects else None

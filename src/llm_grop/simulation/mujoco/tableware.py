@@ -169,7 +169,10 @@ def add_body(parent: mujoco.MjsBody, t: Tableware, pos: tuple[float, float, floa
         body.add_geom(name=f"{t.name}#{k}", type=gtype, size=list(size), pos=list(gpos),
                       quat=[math.cos(gyaw / 2), 0, 0, math.sin(gyaw / 2)],
                       mass=t.mass * v / volume, friction=list(t.friction), rgba=list(rgba),
-                      contype=CONTYPE, conaffinity=CONAFFINITY, condim=4, group=0,
+                      contype=CONTYPE, conaffinity=CONAFFINITY, group=0,
+                      # A berry is round: rolling friction (condim 6) keeps it where it
+                      # is put, as a real strawberry's shape does.
+                      condim=6 if t.style == "berry" else 4,
                       solref=[0.004, 1.0], priority=1)
     return body
 
