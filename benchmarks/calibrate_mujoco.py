@@ -44,9 +44,9 @@ def main() -> None:
     console = Console()
     t0 = time.perf_counter()
     with Progress(console=console) as progress:
-        bar = progress.add_task("manipulation", total=len(REACHES) * args.trials)
+        bar = progress.add_task("manipulation (attempts)", total=None)
         manip = measure_manipulation(sim, REACHES, args.trials, args.seed,
-                                     on_sample=lambda s: progress.advance(bar, 0.5))
+                                     on_sample=lambda s: progress.advance(bar))
         bar = progress.add_task("navigation", total=len(CLEARANCES) * args.trials)
         nav = measure_navigation(sim, CLEARANCES, args.trials, args.seed,
                                  on_sample=lambda s: progress.advance(bar))

@@ -18,7 +18,7 @@ import time
 from common import replay_llm
 
 from llm_grop.api import run
-from llm_grop.simulation.mujoco.render import _render, new_renderer, picture
+from llm_grop.simulation.mujoco.render import new_renderer, picture, render_with
 from llm_grop.simulation.mujoco.simulator import MujocoSimulator
 
 
@@ -66,10 +66,10 @@ def main() -> None:
             time.perf_counter() - t0) / 5
     for w, h in ((640, 480), (320, 240)):
         renderer = new_renderer(sim.world.m, (w, h))
-        _render(renderer, sim.world, "room")
+        render_with(renderer, sim.world, "room")
         t0 = time.perf_counter()
         for _ in range(20):
-            _render(renderer, sim.world, "room")
+            render_with(renderer, sim.world, "room")
         renders[f"video frame {w}x{h}"] = (time.perf_counter() - t0) / 20
         renderer.close()
     print(f"\nTask 8 x {args.seeds} seeds, LLM-GROP, MuJoCo, feasibility {args.feasibility}")

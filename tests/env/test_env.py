@@ -97,3 +97,48 @@ def test_bad_settings_are_bad_input() -> None:
         DiningRoomEnv(render_mode="human")
     with pytest.raises(BadInput, match="unknown"):
         DiningRoomEnv(simulator="nope")
+
+
+def test_stacking_through_the_environment() -> None:
+    env = DiningRoomEnv(["bread plate", "bread"], chairs=0)
+    env.reset(seed=4)
+    scene = env.episode_scene
+    assert scene is not None
+    specs = {i.name: i.spec for i in env.items}
+    targets = tuple(Placement(n, 0.0, -0.1, 0.0, specs[n].shape, specs[n].size,
+                              "bread plate" if n == "bread" else None, n, specs[n].height)
+                    for n in ("bread plate", "bread"))
+    ctx = PlanningContext(scene, env.items)
+    plan = build_plan(ctx, choose(ctx, [Configuration(targets)]),
+                      Navigator(scene, scene.robot.base_radius_m), seed=4, configurations=1)
+    index = {n: k for k, n in enumerate(env.names)}
+    by_name = {t.name: t for t in targets}
+    for step in plan.steps:
+        k = index[step.object or ""]
+        if step.action == "navigate":
+            assert step.goal is not None
+            action = {"action": NAVIGATE, "object": k,
+                      "pose": np.array(step.goal.as_list(), np.float32)}
+        elif step.action == "pick":
+            action = {"action": PICK, "object": k, "pose": np.zeros(3, np.float32)}
+        else:
+            t = by_name[step.object or ""]
+            action = {"action": PLACE, "object": k, "on": index.get(t.on or "", 2),
+                      "pose": np.array([t.x, t.y, t.yaw], np.float32)}
+        for _ in range(3):
+            *_, info = env.step(action)
+            if info["ok"]:
+                break
+        assert info["ok"], info
+    assert env.session is not None
+    final = {p.name: p for p in env.session.final()}
+    assert final["bread"].on == "bread plate"
+
+
+def test_actions_outside_the_space_are_refused() -> None:
+    env = DiningRoomEnv(["bread plate", "bread"], chairs=0)
+    env.reset(seed=4)
+    with pytest.raises(ValueError, match="not in the action space"):
+        env.step({"action": 3, "object": 0, "pose": np.zeros(3, np.float32)})
+    with pytest.raises(ValueError, match="not in the action space"):
+        env.step({"action": PLACE, "object": 0, "on": 5, "pose": np.zeros(3, np.float32)})

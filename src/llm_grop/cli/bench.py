@@ -152,10 +152,8 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     sim = create_simulator(simulator)
     feasibility_profile(feasibility)
     simulator = sim.name
-    if not no_images and hasattr(sim, "picture"):
-        from llm_grop.simulation.mujoco.render import check_rendering
-
-        check_rendering()
+    if not no_images and hasattr(sim, "check_rendering"):
+        sim.check_rendering()  # a simulator that renders says now if it cannot
     backend = BACKENDS.key(flags["backend"])
     if any(get_method(m).uses_llm for m in methods):
         create_llm(backend, llm_options)

@@ -88,9 +88,9 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
         draw_run(result, image_path)
     for view, path in (("table", table_image), ("room", room_image)):
         if path is not None:
-            from llm_grop.simulation.mujoco.render import save_png
+            from llm_grop.render.raster import save_rgb_png
 
-            save_png(sim.picture(view), path)  # type: ignore[union-attr]
+            save_rgb_png(sim.picture(view), path)  # type: ignore[union-attr]
     if not quiet:
         out = Console()
         print_run(result, out)

@@ -4,6 +4,7 @@ Actions (a ``Dict`` space):
 
 * ``action``: 0 navigate, 1 pick, 2 place;
 * ``object``: which object to pick or place (index into the episode's objects);
+* ``on``: for place, the object to put it on (an index; the number of objects: the table);
 * ``pose``: ``(x, y, theta)``: for navigate, the goal in the room frame; for place, the
   object's pose in the target table's frame (metres, radians). The robot plans its own
   path to a navigation goal.
@@ -104,6 +105,7 @@ class DiningRoomEnv(gymnasium.Env):
         self.action_space = spaces.Dict({
             "action": spaces.Discrete(3),
             "object": spaces.Discrete(n),
+            "on": spaces.Discrete(n + 1),
             "pose": spaces.Box(np.array([-w, -d, -math.pi], np.float32),
                                np.array([w, d, math.pi], np.float32), dtype=np.float32),
         })
@@ -131,8 +133,14 @@ class DiningRoomEnv(gymnasium.Env):
         """Run one high-level action to its end."""
         if self.session is None:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
+        action = {"on": len(self.names), **action}
+        if not self.action_space.contains(
+                {k: np.asarray(v, np.float32) if k == "pose" else v for k, v in action.items()}):
+            raise ValueError(f"action {action!r} is not in the action space "
+                             f"{self.action_space}")
         kind = int(action["action"])
         name = self.names[int(action["object"])]
+        on = self.names[int(action["on"])] if int(action["on"]) < len(self.names) else None
         x, y, theta = (float(v) for v in np.asarray(action["pose"], dtype=float))
         before = self.session.time_s
         if kind == NAVIGATE:
@@ -140,7 +148,7 @@ class DiningRoomEnv(gymnasium.Env):
         elif kind == PICK:
             done = self.session.pick(name)
         else:
-            done = self.session.place(name, x, y, theta)
+            done = self.session.place(name, x, y, theta, on)
         self._steps += 1
         now = self._resting()
         gained = len(now - self._on_table) - len(self._on_table - now)

@@ -23,6 +23,7 @@ from llm_grop.llm.base import LLM, BackendOptions, CallLog
 from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import get_method
 from llm_grop.planning.utility import GropOptions
+from llm_grop.render.raster import save_rgb_png
 from llm_grop.render.table import draw_arrangement
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR, create_simulator
 from llm_grop.world.arrangement import Arrangement
@@ -140,12 +141,10 @@ class TrialRunner:
 
     def _render(self, spec: TrialSpec) -> str:
         """Save the simulator's top-down render of the final table."""
-        from llm_grop.simulation.mujoco.render import save_png
-
         name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}_render.png"
         assert self.settings.images is not None
-        save_png(self.simulator.picture("table"),  # type: ignore[attr-defined]
-                 Path(self.settings.images) / name)
+        save_rgb_png(self.simulator.picture("table"),  # type: ignore[attr-defined]
+                     Path(self.settings.images) / name)
         return f"images/{name}"
 
     def _draw(self, spec: TrialSpec, task: Task, final: Arrangement) -> str:

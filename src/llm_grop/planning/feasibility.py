@@ -87,7 +87,7 @@ DEFAULT_FEASIBILITY = ParametricFeasibility()
 
 
 class _ProfileModel(BaseModel):
-    model_config = ConfigDict(extra="allow")
+    model_config = ConfigDict(extra="forbid")
 
     description: str = ""
     nav_max: float = Field(gt=0, le=1)

@@ -18,8 +18,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -31,9 +30,6 @@ from llm_grop.world.arrangement import Item, Placement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point, Step
 from llm_grop.world.scene import Scene
-
-if TYPE_CHECKING:
-    from llm_grop.simulation.kinematic2d_session import Kinematic2DSession
 
 log = logging.getLogger(__name__)
 
@@ -74,14 +70,12 @@ class Kinematic2D:
     def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
                 replan: PathPlanner) -> Kinematic2DSession:
         """A new episode driven one action at a time (the Gymnasium environment uses it)."""
-        from llm_grop.simulation.kinematic2d_session import Kinematic2DSession
-
         return Kinematic2DSession(self.options, scene, items, rng, replan)
 
     def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
                 replan: PathPlanner) -> Execution:
         """Run ``plan`` in ``scene``; its chairs are the real ones."""
-        run = _Run(self.options, plan, scene, rng, replan)
+        run = Run(self.options, plan, scene, rng, replan)
         for step in plan.steps:
             if step.object in run.abandoned:
                 continue
@@ -95,8 +89,9 @@ class Kinematic2D:
         return Execution(tuple(run.out), final, unplaced, run.time_s, run.pose)
 
 
-class _Run:
-    """The state of one execution."""
+class Run:
+    """The state of one execution: where the robot and the objects are, and every attempt
+    so far."""
 
     def __init__(self, options: Kinematic2DOptions, plan: Plan, scene: Scene,
                  rng: np.random.Generator, replan: PathPlanner) -> None:
@@ -135,19 +130,19 @@ class _Run:
             for attempt in range(1, self.o.nav_attempts + 1):
                 path = self._path(goal, step.path, first=(k == 0 and attempt == 1))
                 if not path:
-                    self._record(ExecutedStep("navigate", False, 0.0, step.object, goal,
+                    self.record(ExecutedStep("navigate", False, 0.0, step.object, goal,
                                               attempt=attempt, note="no path"))
                     break
                 length = path_length_m(path)
                 if self.rng.random() < p:
                     duration = leg_duration_s(self.pose, goal, path, self.robot)
-                    self._record(ExecutedStep("navigate", True, duration, step.object, goal,
+                    self.record(ExecutedStep("navigate", True, duration, step.object, goal,
                                               path, attempt=attempt))
                     self.pose = self._arrive(goal)
                     return
                 frac = float(self.rng.uniform(*self.o.stop_fraction))
                 driven = path_prefix(path, frac * length)
-                self._record(ExecutedStep("navigate", False, frac * length / self.robot.speed_mps,
+                self.record(ExecutedStep("navigate", False, frac * length / self.robot.speed_mps,
                                           step.object, goal, driven, attempt=attempt,
                                           note="navigation failed"))
                 end = driven[-1]
@@ -179,7 +174,7 @@ class _Run:
         for attempt in range(1, self.o.manip_attempts + 1):
             ok = bool(self.rng.random() < p)
             landed = self._land(name) if ok and step.action == "place" else None
-            self._record(ExecutedStep(
+            self.record(ExecutedStep(
                 step.action, ok, duration, name, standing=standing,
                 pose=(landed.x, landed.y, landed.yaw) if landed else step.pose,
                 attempt=attempt, note="" if ok else f"{step.action} failed (reach {reach:.2f} m)"))
@@ -198,9 +193,108 @@ class _Run:
         return Placement(t.name, t.x + float(dx), t.y + float(dy), t.yaw + dyaw, t.shape,
                          t.size, on, t.kind, t.height)
 
-    def _record(self, step: ExecutedStep) -> None:
+    def record(self, step: ExecutedStep) -> None:
         log.debug("%s %s: %s (%.1f s)", step.action, step.object or "",
                   "ok" if step.ok else f"failed, {step.note}", step.duration_s)
         self.out.append(step)
         self.time_s += step.duration_s
 
+
+#: Height above the floor of an object in the hand, metres (for observations).
+CARRY_Z_M = 1.1
+
+
+class Kinematic2DSession:
+    """One episode of the 2D simulator driven one action at a time (see
+    :class:`~llm_grop.simulation.base.Session`): the same truth and noise as
+    :class:`Kinematic2D`, one attempt per action."""
+
+    def __init__(self, options: Kinematic2DOptions, scene: Scene, items: Sequence[Item],
+                 rng: np.random.Generator, replan: PathPlanner) -> None:
+        self.items = {i.name: i for i in items}
+        shapes = tuple(Placement(i.name, 0.0, 0.0, 0.0, i.spec.shape, i.spec.size, None,
+                                 i.spec.name, i.spec.height) for i in items)
+        plan = Plan((), (), shapes, 0, 0.0, 1.0, 0.0)
+        self.run = Run(replace(options, nav_attempts=1, manip_attempts=1), plan, scene, rng,
+                        replan)
+        self.scene = scene
+        self.starts: dict[str, tuple[float, float, float]] = {}
+        for i in items:
+            src = scene.source_for(i.name, i.spec.name)
+            if src is not None:
+                self.starts[i.name] = (src.x, src.y, scene.table(src.table).height)
+        self._held: str | None = None
+
+    @property
+    def time_s(self) -> float:
+        """Simulated seconds so far."""
+        return self.run.time_s
+
+    @property
+    def held(self) -> str | None:
+        """The object in the hand, if any."""
+        return self._held
+
+    def robot_pose(self) -> Pose2D:
+        """The base's pose (room frame)."""
+        return self.run.pose
+
+    def object_poses(self) -> dict[str, tuple[float, float, float, float]]:
+        """Every object's bottom centre ``(x, y, z)`` and yaw (room frame)."""
+        top = self.scene.target_table.height
+        out = {}
+        for name in self.items:
+            if name == self._held:
+                p = self.run.pose
+                out[name] = (p.x, p.y, CARRY_Z_M, p.theta)
+            elif name in self.run.placed:
+                pl = self.run.placed[name]
+                q = self.scene.table_to_room(pl.x, pl.y, pl.yaw)
+                under = self.run.placed.get(pl.on or "")
+                out[name] = (q.x, q.y, top + (under.height if under else 0.0), q.theta)
+            else:
+                x, y, z = self.starts.get(name, (math.nan, math.nan, 0.0))
+                out[name] = (x, y, z, 0.0)
+        return out
+
+    def _last(self) -> ExecutedStep:
+        self.run.abandoned.clear()
+        return self.run.out[-1]
+
+    def navigate(self, goal: Pose2D) -> ExecutedStep:
+        """One attempt to drive to ``goal`` along a path the robot plans itself."""
+        self.run.navigate(Step("navigate", None, goal))
+        return self._last()
+
+    def pick(self, name: str) -> ExecutedStep:
+        """One attempt to pick ``name`` where it lies."""
+        if self._held is not None or name not in self.items:
+            why = f"the hand holds {self._held!r}" if self._held else f"no object {name!r}"
+            self.run.record(ExecutedStep("pick", False, 0.0, name, note=f"pick failed: {why}"))
+            return self._last()
+        x, y, _, _ = self.object_poses()[name]
+        self.run.manipulate(Step("pick", name, pose=(x, y, 0.0)))
+        step = self._last()
+        if step.ok:
+            self._held = name
+            self.run.placed.pop(name, None)
+        return step
+
+    def place(self, name: str, x: float, y: float, yaw: float, on: str | None = None
+              ) -> ExecutedStep:
+        """One attempt to put the held ``name`` at ``(x, y, yaw)`` (table frame)."""
+        if self._held != name:
+            self.run.record(ExecutedStep("place", False, 0.0, name,
+                                          note=f"place failed: the hand does not hold {name!r}"))
+            return self._last()
+        shape = self.run.targets[name]
+        self.run.targets[name] = replace(shape, x=x, y=y, yaw=yaw, on=on)
+        self.run.manipulate(Step("place", name))
+        step = self._last()
+        if step.ok:
+            self._held = None
+        return step
+
+    def final(self) -> tuple[Placement, ...]:
+        """Every object on the target table (table frame)."""
+        return tuple(self.run.placed.values())

@@ -53,6 +53,7 @@ class Episode:
         self.out: list[ExecutedStep] = []
         self.abandoned: set[str] = set()
         self.placed: set[str] = set()
+        self.last_unreachable = False
         self.goal: Pose2D | None = None
         self.mark = float(world.d.time)
 
@@ -73,8 +74,8 @@ class Episode:
                 last.duration_s + float(self.w.d.time) - self.mark, 6))
             self.mark = float(self.w.d.time)
 
-    def drive_to(self, goal: Pose2D, path: tuple[tuple[float, float], ...], name: str,
-                  attempt: int) -> bool:
+    def drive_to(self, goal: Pose2D, path: tuple[tuple[float, float], ...], name: str | None,
+                 attempt: int) -> bool:
         """Drive ``path`` to ``goal`` and on to a noisy final pose; record the leg."""
         drive = self.w.drive(path, goal.theta)
         if not drive.ok:
@@ -145,6 +146,7 @@ class Episode:
         """One attempt to pick ``name``."""
         standing = self.w.base_pose()
         result = manipulation.pick(self.w, name)
+        self.last_unreachable = result.unreachable
         self.record(ExecutedStep("pick", result.ok, result.duration_s, name, standing=standing,
                                  pose=pose, attempt=attempt,
                                  note="" if result.ok else f"pick failed: {result.note}"))
@@ -161,8 +163,11 @@ class Episode:
             result = manipulation.Attempt(False, 0.0, f"the hand does not hold {name!r}")
         else:
             result = manipulation.place(self.w, name, q.x, q.y, q.theta, support)
+        self.last_unreachable = result.unreachable
         p = self.w.object_pose(name)
-        pose = tuple(round(v, 4) for v in self.scene.room_to_table(p.x, p.y, p.yaw))
+        # Where it landed, table frame; nothing while the hand still holds it.
+        pose = None if self.w.held == name else \
+            tuple(round(v, 4) for v in self.scene.room_to_table(p.x, p.y, p.yaw))
         self.record(ExecutedStep("place", result.ok, result.duration_s, name,
                                  standing=standing, pose=pose,  # type: ignore[arg-type]
                                  attempt=attempt,
@@ -181,7 +186,7 @@ class Episode:
                 return
             if step.action == "place" and self.w.held != name:
                 return  # released: it lies where physics left it
-            if done.note.split(": ", 1)[-1].startswith("no IK solution"):
+            if self.last_unreachable:
                 self._reapproach(name)
         self.abandoned.add(name)
         manipulation.release(self.w)

@@ -28,17 +28,22 @@ APPROACH_M = 0.10
 DROP_M = 0.006
 #: Largest tilt of a placed object still standing (radians).
 MAX_TILT_RAD = 0.35
+#: Where the hand lets go of an abandoned object: in front of the base, below any table
+#: top (base frame, metres).
+DROP_POINT = (0.45, 0.0, 0.45)
 #: Largest distance of a placed object from its target (metres).
 MAX_SLIDE_M = 0.03
 
 
 @dataclass(frozen=True)
 class Attempt:
-    """How one pick or place went: ``ok``, the simulated ``duration_s`` and a ``note``."""
+    """How one pick or place went: ``ok``, the simulated ``duration_s``, a ``note``, and
+    whether it failed because the arm could not reach (``unreachable``)."""
 
     ok: bool
     duration_s: float
     note: str = ""
+    unreachable: bool = False
 
 
 def _to_base(w: World, x: float, y: float, z: float) -> tuple[float, float, float]:
@@ -72,8 +77,9 @@ def pick(w: World, name: str) -> Attempt:
             break
     if plan is None:
         reach = candidates[0][0]
-        return Attempt(False, w.d.time - t0, f"no IK solution (reach {reach:.2f} m)")
+        return Attempt(False, w.d.time - t0, f"no IK solution (reach {reach:.2f} m)", True)
     q_at, q_above, width = plan
+    w.grip_width = width
     w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
     note = w.move_arm(q_above) or w.move_arm(q_at, speed_radps=0.6, at_surface=True)
     if note:
@@ -86,6 +92,9 @@ def pick(w: World, name: str) -> Attempt:
     note = w.move_arm(q_above, speed_radps=0.6, at_surface=True) \
         or w.move_arm(w.ik.carry())
     if note:
+        # Put it back down: a failed pick never leaves the object in the hand.
+        _weld(w, name, False)
+        w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
         return _abort(w, t0, note)
     return Attempt(True, w.d.time - t0)
 
@@ -115,12 +124,12 @@ def place(w: World, name: str, x: float, y: float, yaw: float, support: str) -> 
     above = w.ik.solve((tb[0], tb[1], tb[2] + APPROACH_M), hand_yaw, at.q)
     if not (at.ok and above.ok):
         reach = math.hypot(x - b.x, y - b.y)
-        return Attempt(False, w.d.time - t0, f"no IK solution (reach {reach:.2f} m)")
+        return Attempt(False, w.d.time - t0, f"no IK solution (reach {reach:.2f} m)", True)
     note = w.move_arm(above.q) or w.move_arm(at.q, speed_radps=0.5, at_surface=True)
     if note:
         return _abort(w, t0, note)
     _weld(w, name, False)
-    w.set_fingers(min(w.wm.objects[name].size[0] + 0.03, MAX_OPENING_M), 0.25)
+    w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.25)
     w.move_arm(above.q, speed_radps=0.6, at_surface=True)
     w.move_arm(w.ik.carry())
     w.advance(0.2)
@@ -148,10 +157,16 @@ def _judged(w: World, t0: float, name: str, x: float, y: float, support: str) ->
 
 
 def release(w: World) -> None:
-    """Let go of whatever the hand holds (it drops where it is)."""
-    if w.held is not None:
-        _weld(w, w.held, False)
-        w.set_fingers(MAX_OPENING_M, 0.2)
+    """Give up what the hand holds: lower it in front of the base, below table height, and
+    let go (it falls to the floor, not onto a table already set)."""
+    if w.held is None:
+        return
+    low = w.ik.solve(DROP_POINT, _hand_yaw(w), w.arm_q(), elbow_up=False)
+    if low.ok:
+        w.move_arm(low.q, at_surface=True)
+    _weld(w, w.held, False)
+    w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.3)
+    w.move_arm(w.ik.carry(), at_surface=True)
 
 
 def _abort(w: World, t0: float, note: str) -> Attempt:

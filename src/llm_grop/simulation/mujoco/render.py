@@ -39,8 +39,13 @@ def check_rendering() -> None:
 
 
 def new_renderer(model: mujoco.MjModel, size: tuple[int, int]) -> mujoco.Renderer:
-    """A renderer of ``size`` (width, height) pixels; :class:`BadInput` naming what to
-    install when no offscreen OpenGL is available."""
+    """A renderer of ``size`` (width, height) pixels; :class:`BadInput` for a size beyond
+    the model's offscreen buffer, or naming what to install when no offscreen OpenGL is
+    available."""
+    limit = (model.vis.global_.offwidth, model.vis.global_.offheight)
+    if size[0] > limit[0] or size[1] > limit[1]:
+        raise BadInput(f"image size {size[0]}x{size[1]}: larger than the world's offscreen "
+                       f"buffer {limit[0]}x{limit[1]}; raise MujocoOptions.image_size")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # GLFW warns before it fails
@@ -67,12 +72,14 @@ def picture(world: World, view: View, size: tuple[int, int] | None = None) -> np
     width, height = size or (m.vis.global_.offwidth, m.vis.global_.offheight)
     renderer = new_renderer(m, (width, height))
     try:
-        return _render(renderer, world, view)
+        return render_with(renderer, world, view)
     finally:
         renderer.close()
 
 
-def _render(renderer: mujoco.Renderer, world: World, view: View) -> np.ndarray:
+def render_with(renderer: mujoco.Renderer, world: World, view: View) -> np.ndarray:
+    """An RGB image of ``world`` from ``view`` with an open ``renderer`` (for frame after
+    frame, as a video needs)."""
     option = mujoco.MjvOption()
     option.geomgroup[:] = _GROUPS_TABLE if view == "table" else _GROUPS_ROOM
     option.sitegroup[:] = 0
@@ -95,7 +102,7 @@ def _room_camera(world: World) -> mujoco.MjvCamera:
 
 
 def save_png(image: np.ndarray, path: str | os.PathLike[str]) -> Path:
-    """Write ``image`` to ``path`` as PNG; the path."""
+    """Write ``image`` to ``path`` as PNG; the path (for Python users of :func:`picture`)."""
     from PIL import Image
 
     out = Path(path)
@@ -123,7 +130,7 @@ class VideoRecorder:
     def __call__(self, world: World) -> None:
         if self._renderer is None:
             self._renderer = new_renderer(world.m, self.size)
-        self._writer.send(np.ascontiguousarray(_render(self._renderer, world, "room")))
+        self._writer.send(np.ascontiguousarray(render_with(self._renderer, world, "room")))
         self.frames += 1
 
     def close(self) -> None:

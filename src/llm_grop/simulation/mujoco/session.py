@@ -49,7 +49,7 @@ class MujocoSession:
         path = e.path_to(goal, (), first=False)
         if not path:
             e.record(ExecutedStep("navigate", False, 0.0, None, goal, note="no path"))
-        elif e.drive_to(goal, path, "", 1):
+        elif e.drive_to(goal, path, None, 1):
             e.goal = goal
         return e.out[-1]
 

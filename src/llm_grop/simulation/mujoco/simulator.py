@@ -27,7 +27,7 @@ from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.mujoco.arm import ArmIK
 from llm_grop.simulation.mujoco.episode import Episode, final_placements
 from llm_grop.simulation.mujoco.options import MujocoOptions
-from llm_grop.simulation.mujoco.render import VideoRecorder, View, picture
+from llm_grop.simulation.mujoco.render import VideoRecorder, View, check_rendering, picture
 from llm_grop.simulation.mujoco.session import MujocoSession
 from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.simulation.mujoco.world import World
@@ -61,6 +61,10 @@ class MujocoSimulator:
             raise RuntimeError("nothing executed yet")
         return picture(self.world, view, size)
 
+    def check_rendering(self) -> None:
+        """:class:`BadInput` naming the apt package when offscreen rendering is missing."""
+        check_rendering()
+
     def check(self, scene: Scene, items: Sequence[Item] = ()) -> None:
         """:class:`BadInput` when this scene or these objects cannot be simulated (called
         before planning, so bad input costs no work)."""
@@ -72,9 +76,11 @@ class MujocoSimulator:
                 replan: PathPlanner) -> Execution:
         """Run ``plan`` in ``scene`` (its chairs are the real ones)."""
         o = self.options
+        world = self._world(scene, plan.configuration)
         recorder = VideoRecorder(o.video_path, fps=o.video_fps, size=o.image_size) \
             if o.video_path else None
-        world = self._world(scene, plan.configuration, recorder)
+        if recorder is not None:
+            world.on_frame = _both(self.on_frame, recorder)
         run = Episode(o, scene, rng, replan, world)
         targets = {p.name: p for p in plan.configuration}
         try:
@@ -100,11 +106,10 @@ class MujocoSimulator:
         """A new episode in ``scene`` with ``items`` at their starts, driven one action at
         a time (the Gymnasium environment uses this)."""
         placements = tuple(_placeholder(i) for i in items)
-        world = self._world(scene, placements, None)
+        world = self._world(scene, placements)
         return MujocoSession(Episode(self.options, scene, rng, replan, world), placements)
 
-    def _world(self, scene: Scene, placements: Sequence[Placement],
-               recorder: VideoRecorder | None) -> World:
+    def _world(self, scene: Scene, placements: Sequence[Placement]) -> World:
         if self._ik is None:
             self._ik = ArmIK()
         starts = []
@@ -116,13 +121,21 @@ class MujocoSimulator:
             starts.append(ObjectStart(item, src.x, src.y, scene.table(src.table).height))
         o = self.options
         wm = build(scene, starts, timestep_s=o.timestep_s, image_size=o.image_size)
-        hooks = [h for h in (self.on_frame, recorder) if h is not None]
         world = World(wm, scene, self._ik, speed_mps=scene.robot.speed_mps,
-                      turn_speed_radps=scene.robot.turn_speed_radps,
-                      on_frame=(lambda w: [h(w) for h in hooks]) if hooks else None,
+                      turn_speed_radps=scene.robot.turn_speed_radps, on_frame=self.on_frame,
                       frame_dt_s=o.video_frame_s)
         self.world = world
         return world
+
+
+def _both(first: Callable[[World], None] | None, second: Callable[[World], None]
+          ) -> Callable[[World], None]:
+    """A frame hook calling ``first`` (if any), then ``second``."""
+    def hook(w: World) -> None:
+        if first is not None:
+            first(w)
+        second(w)
+    return hook
 
 
 def _placeholder(item: Item) -> Placement:

@@ -23,7 +23,7 @@ from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import Point
 from llm_grop.world.scene import Scene
 
-#: Physics steps between two control updates (0.02 s at the default time step).
+#: Physics steps between two control updates (0.04 s at the default 4 ms time step).
 CONTROL_STEPS = 10
 #: How far, metres, the base moves before furniture it touched at the start counts again.
 CLEAR_M = 0.3
@@ -77,6 +77,8 @@ class World:
         self.pads = {side: np.array([m.geom(f"finger_{side}").id, m.geom(f"pad_{side}").id])
                      for side in ("left", "right")}
         self.held: str | None = None
+        #: Width, metres, of the object between the pads at the last grasp.
+        self.grip_width = 0.05
         start = scene.robot_start
         self.d.qpos[self.base_qpos] = (start.x, start.y, start.theta)
         self.d.ctrl[self.base_ctrl] = (start.x, start.y, start.theta)
@@ -229,27 +231,43 @@ class World:
         if note:
             p = self.base_pose()
             self.d.ctrl[self.base_ctrl] = (p.x, p.y, float(self.d.qpos[self.base_qpos[2]]))
-        self._settle_base()
+        if not self._settle_base() and stop_on_contact and not note:
+            note = "blocked short of its goal"
         p = self.base_pose()
         if math.dist(passed[-1], (p.x, p.y)) > 1e-3:
             passed.append((p.x, p.y))
         return Drive(not note, tuple(passed), self.d.time - t0, note)
 
-    def _settle_base(self, limit_s: float = 2.0) -> None:
-        """Wait until the base has caught up with its reference (1 mm, 2 mrad)."""
+    def _settle_base(self, limit_s: float = 2.0) -> bool:
+        """Wait until the base has caught up with its reference (1 mm, 2 mrad); whether it
+        came within 2 cm and 0.05 rad of it (else something holds it back)."""
         for _ in range(max(1, round(limit_s / (self.m.opt.timestep * CONTROL_STEPS)))):
             err = self.d.qpos[self.base_qpos] - self.d.ctrl[self.base_ctrl]
             if abs(err[0]) < 1e-3 and abs(err[1]) < 1e-3 and abs(err[2]) < 2e-3:
-                return
+                return True
             mujoco.mj_step(self.m, self.d, nstep=CONTROL_STEPS)
             self._frame()
+        err = self.d.qpos[self.base_qpos] - self.d.ctrl[self.base_ctrl]
+        return bool(math.hypot(err[0], err[1]) < 0.02 and abs(err[2]) < 0.05)
 
     def back_off(self, distance_m: float = 0.08) -> None:
-        """Reverse a little along the base's heading, as a robot does after a bump."""
+        """Move a little away from the furniture the robot bumped (straight back when it
+        touches nothing any more), as a robot does after a bump."""
         p = self.base_pose()
         yaw = float(self.d.qpos[self.base_qpos[2]])
-        ref = (p.x - distance_m * math.cos(p.theta), p.y - distance_m * math.sin(p.theta), yaw)
-        self.d.ctrl[self.base_ctrl] = ref
+        away = (-math.cos(p.theta), -math.sin(p.theta))
+        n = self.d.ncon
+        for k in range(n):
+            a, b = self.d.contact.geom[k]
+            if (self.wm.robot[a] and self.wm.furniture[b]) or \
+                    (self.wm.robot[b] and self.wm.furniture[a]):
+                cx, cy = (float(v) for v in self.d.contact.pos[k][:2])
+                norm = math.hypot(p.x - cx, p.y - cy)
+                if norm > 1e-6:
+                    away = ((p.x - cx) / norm, (p.y - cy) / norm)
+                break
+        self.d.ctrl[self.base_ctrl] = (p.x + distance_m * away[0],
+                                       p.y + distance_m * away[1], yaw)
         self.advance(0.5)
 
     # -- the arm ----------------------------------------------------------------------

@@ -4,7 +4,7 @@ The robot comes from ``assets/robot.xml``; floor, walls, tables with legs, chair
 back and legs, and the tableware are added around it. World frame = the scene's room frame
 (metres, radians), z up from the floor. Furniture is fixed to the world; tableware bodies are
 free, each with an inactive weld to the hand that a grasp switches on (see
-:mod:`llm_grop.simulation.mujoco.world`).
+:mod:`llm_grop.simulation.mujoco.manipulation`).
 """
 
 from __future__ import annotations
@@ -112,7 +112,7 @@ def check_scene(scene: Scene) -> None:
             raise BadInput(f"scene {scene.name!r}: the robot starts inside {label}")
 
 
-def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.002,
+def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.004,
           image_size: tuple[int, int] = (640, 480)) -> WorldModel:
     """The dining room of ``scene`` with the robot at its start and the tableware at
     ``starts``. Raises :class:`BadInput` when the scene cannot be built."""
