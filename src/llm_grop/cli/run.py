@@ -111,10 +111,10 @@ def _simulator(name: str, pictures: object, video: Path | None) -> Any:
     if SIMULATORS.key(name) != "mujoco":
         flag = "--video" if video else "--table-image/--room-image"
         raise BadInput(f"{flag}: needs --simulator mujoco (got {name!r})")
-    from llm_grop.simulation.mujoco.render import check_rendering
+    from llm_grop.simulation.mujoco.render import check_rendering, check_video_path
     from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
 
-    if video is not None and video.suffix.lower() != ".mp4":
-        raise BadInput(f"--video {video}: the video must be an .mp4 file")
+    if video is not None:
+        check_video_path(video)
     check_rendering()
     return MujocoSimulator(MujocoOptions(video_path=str(video) if video else None))

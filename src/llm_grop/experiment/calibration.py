@@ -25,6 +25,7 @@ from scipy.optimize import minimize
 from llm_grop import seeds
 from llm_grop.planning.feasibility import ParametricFeasibility
 from llm_grop.planning.navigation import Navigator
+from llm_grop.simulation.base import SessionSimulator
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box, Pose2D
 from llm_grop.world.request import items_from_names
@@ -53,7 +54,7 @@ def room(sources: tuple[ObjectSource, ...] = (), start: Pose2D | None = None) ->
                  source_tables=("dining table",), sources=sources, chairs_listed=True)
 
 
-def measure_manipulation(simulator: object, reaches: Sequence[float], trials: int,
+def measure_manipulation(simulator: SessionSimulator, reaches: Sequence[float], trials: int,
                          seed: int = 0, on_sample: Callable[[Sample], None] | None = None
                          ) -> list[Sample]:
     """Picks and places at each planned reach (metres), ``trials`` episodes each; the goal
@@ -72,7 +73,7 @@ def measure_manipulation(simulator: object, reaches: Sequence[float], trials: in
             items = items_from_names([name], catalog)
             scene = room((ObjectSource(name, "dining table", ox, oy),),
                          Pose2D(gx, 0.45, math.pi / 2))
-            session = simulator.session(  # type: ignore[attr-defined]
+            session = simulator.session(
                 scene, items, seeds.stream(seed, "calibration", 1 + i, k),
                 replan=Navigator(scene, robot.base_radius_m))
             if not session.navigate(Pose2D(gx, goal_y, math.pi / 2)).ok:
@@ -103,7 +104,7 @@ def _spot(rng: np.random.Generator, reach: float, radius: float
     return None
 
 
-def measure_navigation(simulator: object, clearances: Sequence[float], trials: int,
+def measure_navigation(simulator: SessionSimulator, clearances: Sequence[float], trials: int,
                        seed: int = 0, on_sample: Callable[[Sample], None] | None = None
                        ) -> list[Sample]:
     """Drives to goals ``clearance`` metres from an obstacle, ``trials`` each: in turn the
@@ -124,7 +125,7 @@ def measure_navigation(simulator: object, clearances: Sequence[float], trials: i
             items = items_from_names(["dinner fork"], catalog)
             scene = room((ObjectSource("dinner fork", "dining table", 3.0, 2.1),), start
                          ).with_chairs(chairs)
-            session = simulator.session(  # type: ignore[attr-defined]
+            session = simulator.session(
                 scene, items, seeds.stream(seed, "calibration", 2000 + i, k),
                 replan=Navigator(scene, robot.base_radius_m))
             out.append(Sample(c, session.navigate(goal).ok))

@@ -10,11 +10,12 @@ planner never learns which simulator runs its plan. Backends are registered in
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
 
-from llm_grop.world.arrangement import Placement
+from llm_grop.world.arrangement import Item, Placement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point
 from llm_grop.world.scene import Scene
@@ -42,6 +43,17 @@ class Simulator(Protocol):
         ``final`` holds every object that reached the table where it really ended up
         (table frame), and each successful ``place`` step's ``pose`` is where it landed.
         """
+        ...
+
+
+class SessionSimulator(Protocol):
+    """A simulator that can also be driven one action at a time."""
+
+    name: str
+
+    def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
+                replan: PathPlanner) -> Session:
+        """A new episode in ``scene`` with ``items`` at their starts."""
         ...
 
 

@@ -26,7 +26,7 @@ from llm_grop.geometry.motion import leg_duration_s, path_length_m, path_prefix
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
-from llm_grop.world.arrangement import Item, Placement
+from llm_grop.world.arrangement import Item, Placement, item_placement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point, Step
 from llm_grop.world.scene import Scene
@@ -212,8 +212,7 @@ class Kinematic2DSession:
     def __init__(self, options: Kinematic2DOptions, scene: Scene, items: Sequence[Item],
                  rng: np.random.Generator, replan: PathPlanner) -> None:
         self.items = {i.name: i for i in items}
-        shapes = tuple(Placement(i.name, 0.0, 0.0, 0.0, i.spec.shape, i.spec.size, None,
-                                 i.spec.name, i.spec.height) for i in items)
+        shapes = tuple(item_placement(i) for i in items)
         plan = Plan((), (), shapes, 0, 0.0, 1.0, 0.0)
         self.run = Run(replace(options, nav_attempts=1, manip_attempts=1), plan, scene, rng,
                         replan)

@@ -48,6 +48,13 @@ class Placement:
     height: float = 0.0
 
 
+def item_placement(item: Item) -> Placement:
+    """``item`` as a placement at the table's centre: its shape, footprint and height,
+    for code that needs an object's dimensions before it has a place."""
+    s = item.spec
+    return Placement(item.name, 0.0, 0.0, 0.0, s.shape, s.size, None, s.name, s.height)
+
+
 @dataclass(frozen=True)
 class Configuration:
     """One feasible set of placements for every item (a sample of the sampler)."""

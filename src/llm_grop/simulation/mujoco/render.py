@@ -101,13 +101,10 @@ def _room_camera(world: World) -> mujoco.MjvCamera:
     return cam
 
 
-def save_png(image: np.ndarray, path: str | os.PathLike[str]) -> Path:
-    """Write ``image`` to ``path`` as PNG; the path (for Python users of :func:`picture`)."""
-    from PIL import Image
-
-    out = Path(path)
-    Image.fromarray(image).save(out, format="PNG")
-    return out
+def check_video_path(path: str | os.PathLike[str]) -> None:
+    """:class:`BadInput` unless ``path`` names an MP4 file."""
+    if Path(path).suffix.lower() != ".mp4":
+        raise BadInput(f"--video {path}: the video must be an .mp4 file")
 
 
 class VideoRecorder:
@@ -116,8 +113,7 @@ class VideoRecorder:
 
     def __init__(self, path: str | os.PathLike[str], *, fps: int = 25,
                  size: tuple[int, int] = (640, 480)) -> None:
-        if Path(path).suffix.lower() != ".mp4":
-            raise BadInput(f"--video {path}: the video must be an .mp4 file")
+        check_video_path(path)
         import imageio_ffmpeg
 
         self.path, self.size = Path(path), size

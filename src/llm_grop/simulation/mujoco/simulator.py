@@ -32,7 +32,7 @@ from llm_grop.simulation.mujoco.session import MujocoSession
 from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.simulation.mujoco.world_model import ObjectStart, build, check_scene
-from llm_grop.world.arrangement import Item, Placement
+from llm_grop.world.arrangement import Item, Placement, item_placement
 from llm_grop.world.plan import Execution, Plan
 from llm_grop.world.scene import Scene
 
@@ -70,7 +70,7 @@ class MujocoSimulator:
         before planning, so bad input costs no work)."""
         check_scene(scene)
         for item in items:
-            tableware(_placeholder(item))
+            tableware(item_placement(item))
 
     def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
                 replan: PathPlanner) -> Execution:
@@ -105,7 +105,7 @@ class MujocoSimulator:
                 replan: PathPlanner) -> MujocoSession:
         """A new episode in ``scene`` with ``items`` at their starts, driven one action at
         a time (the Gymnasium environment uses this)."""
-        placements = tuple(_placeholder(i) for i in items)
+        placements = tuple(item_placement(i) for i in items)
         world = self._world(scene, placements)
         return MujocoSession(Episode(self.options, scene, rng, replan, world), placements)
 
@@ -136,9 +136,3 @@ def _both(first: Callable[[World], None] | None, second: Callable[[World], None]
             first(w)
         second(w)
     return hook
-
-
-def _placeholder(item: Item) -> Placement:
-    """An item as a placement (its shape and size; the pose is not used)."""
-    s = item.spec
-    return Placement(item.name, 0.0, 0.0, 0.0, s.shape, s.size, None, s.name, s.height)

@@ -168,8 +168,7 @@ class World:
             return ""
         geoms = self.d.contact.geom[:n]
         wm = self.wm
-        held = np.array([o == self.held and o != "" for o in wm.owner]) \
-            if self.held else np.zeros(len(wm.owner), bool)
+        held = wm.parts[self.held] if self.held else np.zeros(len(wm.owner), bool)
         mover = (wm.arm if arm_only else wm.robot) | held
         if at_surface:
             mover = mover & ~wm.fingers & ~held

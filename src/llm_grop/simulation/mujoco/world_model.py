@@ -71,6 +71,7 @@ class WorldModel:
         arm: per geom, whether it belongs to the arm or the gripper.
         fingers: per geom, whether it is a finger or pad (they may touch a table top).
         owner: per geom, the tableware it belongs to ("" for none).
+        parts: tableware name -> per geom, whether the geom is part of it.
         tops: table name -> geom id of its top.
         welds: tableware name -> id of its grasp weld.
     """
@@ -82,6 +83,7 @@ class WorldModel:
     arm: np.ndarray
     fingers: np.ndarray
     owner: tuple[str, ...]
+    parts: dict[str, np.ndarray]
     tops: dict[str, int]
     welds: dict[str, int]
 
@@ -244,8 +246,9 @@ def _index(model: mujoco.MjModel, scene: Scene, objects: dict[str, Tableware]) -
         furniture[g] = not robot[g] and not owner[g] and name != "floor"
     tops = {t.name: model.geom(f"top:{t.name}").id for t in scene.tables}
     welds = {n: model.equality(f"grip:{n}").id for n in objects}
-    return WorldModel(model, objects, furniture, robot, arm, fingers, tuple(owner), tops,
-                      welds)
+    parts = {n: np.array([o == n for o in owner]) for n in objects}
+    return WorldModel(model, objects, furniture, robot, arm, fingers, tuple(owner), parts,
+                      tops, welds)
 
 
 def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
