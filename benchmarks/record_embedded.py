@@ -4,9 +4,11 @@ Runs the arrangement (paper §III-A, §III-B) of each task and seed on the embed
 SmolLM2 model and appends every LLM call to a JSONL file that `--llm replay` reads.
 Episodes (`llm-grop run`, the benchmarks) with the same task and seed then replay
 these answers exactly, without the model. Tasks and seeds already in the file are
-skipped, so an interrupted recording can be resumed.
+skipped, so an interrupted recording can be resumed. With ``--fill``, every task and
+seed is run again, answering from the file where it can and asking the model only for
+calls the file lacks (a question added in a later version), which are appended.
 Run: .venv/bin/python benchmarks/record_embedded.py --tasks 1-8 --seeds 0-19 \
-        --out benchmarks/data/embedded_calls.jsonl
+        --out benchmarks/data/embedded_calls.jsonl [--fill]
 """
 
 from __future__ import annotations
@@ -16,8 +18,36 @@ import json
 import time
 from pathlib import Path
 
-from llm_grop import arrange, make_llm
-from llm_grop.errors import LLMGropError
+from llm_grop import BackendOptions, arrange, make_llm
+from llm_grop.errors import LLMGropError, ReplayMissing
+from llm_grop.llm.base import SamplingParams
+from llm_grop.llm.record import LLMCallRecord, append_record
+from llm_grop.llm.registry import create_llm
+from llm_grop.llm.replay import ReplayLLM
+
+
+class FillIn:
+    """Answers from a record file, and from the embedded model (appending its answer to
+    the file) for a call the file lacks."""
+
+    backend = "embedded"
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.replay = ReplayLLM(BackendOptions(replay_path=str(path)))
+        self.model = self.replay.model
+        self.live = create_llm("embedded", BackendOptions())
+        self.filled = 0
+
+    def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
+                 ) -> LLMCallRecord:
+        try:
+            return self.replay.complete(prompt, params, grammar)
+        except ReplayMissing:
+            record = self.live.complete(prompt, params, grammar)
+            append_record(self.path, record)
+            self.filled += 1
+            return record
 
 
 def _span(text: str) -> list[int]:
@@ -34,7 +64,19 @@ def main() -> None:
     ap.add_argument("--tasks", default="1-8")
     ap.add_argument("--seeds", default="0-19")
     ap.add_argument("--out", type=Path, default=Path("benchmarks/data/embedded_calls.jsonl"))
+    ap.add_argument("--fill", action="store_true",
+                    help="answer from the file, asking the model only for missing calls")
     args = ap.parse_args()
+    if args.fill:
+        filler = FillIn(args.out)
+        for task in _span(args.tasks):
+            for seed in _span(args.seeds):
+                try:
+                    arrange(task=task, llm=make_llm(filler), seed=seed)
+                except LLMGropError as exc:
+                    print(f"task {task} seed {seed}: {exc}")
+        print(json.dumps({"filled": filler.filled}))
+        return
     done_file = args.out.with_suffix(".done")
     done = set(done_file.read_text().split()) if done_file.exists() else set()
     llm = make_llm("embedded", record=args.out)

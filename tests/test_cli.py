@@ -34,7 +34,8 @@ def test_arrange_writes_contract_json_and_png(chat_server, tmp_path: Path, capsy
         assert set(o) >= {"name", "x", "y", "yaw", "shape", "size", "on"}
     assert {"subject": "dinner fork", "relation": "to the left of",
             "reference": "dinner plate"} in data["relations"]
-    assert data["llm"]["backend"] == "openai" and data["llm"]["calls"] == 3
+    # Template 1, two Template 2 questions and the plate's distance from the diner's edge.
+    assert data["llm"]["backend"] == "openai" and data["llm"]["calls"] == 4
     assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -45,7 +46,7 @@ def test_record_then_replay_is_byte_identical(chat_server, tmp_path: Path, monke
     first = tmp_path / "first.json"
     assert main(["arrange", REQUEST, *_openai(chat_server), "--record", str(rec),
                  "--json", str(first), "-q"]) == 0
-    assert len(rec.read_text().splitlines()) == 3
+    assert len(rec.read_text().splitlines()) == 4
     replays = []
     for k in range(2):
         path = tmp_path / f"replay{k}.json"

@@ -84,12 +84,14 @@ def test_bad_scenes(tmp_path: Path, capsys, scene: str, extra: list[str], code: 
 
 
 def test_object_out_of_every_reach(tmp_path: Path, capsys) -> None:
-    # One object is placed at the centre (no LLM call is needed); on a 2.4 x 2 m table
-    # the centre is 1 m from every edge, beyond the arm's reach from any side.
+    # One object, 85 cm from the diner's edge by preference (no LLM call is needed): on a
+    # 2.4 x 2 m table that is near the centre, 1 m from every edge, beyond the arm's reach
+    # from any side.
     scene = _scene(tmp_path, ROOM.replace("[0.9, 0.6]", "[2.4, 2.0]")
                    .replace("[1.5, 0.6, 0.0]", "[0.6, 0.4, 0.0]"))
     args = ["run", "set the table with a fruit bowl", "--scene", scene, "--llm", "openai",
-            "--base-url", "http://127.0.0.1:9", "-q"]
+            "--base-url", "http://127.0.0.1:9", "--prefer",
+            "the fruit bowl 85 cm from the diner's edge", "-q"]
     assert main(args) == 1
     assert "no standing position can reach 'fruit bowl'" in _one_line_error(capsys)
 

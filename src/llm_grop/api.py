@@ -8,6 +8,7 @@ from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from llm_grop.arrangement.diners import seat_items, seat_table
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
 from llm_grop.errors import BadInput
 from llm_grop.llm.base import LLM, BackendOptions, CallLog
@@ -66,13 +67,15 @@ def arrange(request: str | None = None, *, task: int | None = None,
     """
     catalog = catalog or Catalog.load(catalog_files)
     text, items = resolve_items(request, task, catalog)
+    items = seat_items(items, table or Table())
+    top = seat_table(table or Table(), items)
     log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
-    return arrange_items(text, items, log, catalog, table or Table(), seed, options, on_event)
+    return arrange_items(text, items, log, catalog, top, seed, options, on_event)
 
 
 def run(request: str | None = None, *, task: int | None = None, method: str = "llm-grop",
         scene: Scene | str | PathLike[str] | None = None, chairs: int | None = None,
-        seed: int = 0, llm: str | LLM | CallLog = "embedded",
+        table: Table | None = None, seed: int = 0, llm: str | LLM | CallLog = "embedded",
         llm_options: BackendOptions | None = None, catalog: Catalog | None = None,
         catalog_files: Sequence[str | PathLike[str]] = (),
         options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
@@ -86,7 +89,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     room. ``chairs`` chairs are sampled near the target table for this seed (``None``
     keeps the scene file's own chairs, or samples one if it lists none; ``chairs: []``
     in the file means no chairs); the robot senses
-    them at planning time.
+    them at planning time. ``table`` replaces the target table's top (same centre, yaw
+    and height), e.g. ``Table.circle(1.2)`` for a round one; ``None`` keeps the scene's.
     ``method`` is one of :func:`available_methods` and ``simulator`` one of
     :func:`available_simulators` or a simulator object, such as a
     :class:`~llm_grop.simulation.mujoco.simulator.MujocoSimulator` with options (the plan
@@ -100,7 +104,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.simulation.scenario import prepare_episode
-    from llm_grop.world.scene_file import load_scene
+    from llm_grop.world.scene_file import load_scene, set_target_top
 
     catalog = catalog or Catalog.load(catalog_files)
     text, items = resolve_items(request, task, catalog, tasks)
@@ -108,6 +112,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
     feasibility_profile(feasibility)  # an unknown profile is reported before any work
     base = scene if isinstance(scene, Scene) else load_scene(scene)
+    if table is not None:
+        base = set_target_top(base, table, keep_chairs=chairs is None)
     for k, source in enumerate(base.sources):
         kind = re.sub(r"\s+\d+$", "", source.object)
         if catalog.lookup(kind) is None:
@@ -116,6 +122,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
                            f"did you mean {', '.join(map(repr, catalog.suggest(kind))) or '?'}")
     if chairs is None and not (base.chairs or base.chairs_listed):
         chairs = 1
+    items = seat_items(items, base.target_top)  # a scene with seats: one setting each
+    top = seat_table(base.target_top, items)  # too many diners: reported before any work
     check = getattr(sim, "check", None)
     if check is not None:
         check(base, items)
@@ -123,7 +131,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     log = None
     if chosen.uses_llm:
         log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
-    inp = EpisodeInput(text, items, episode.target_top, seed, catalog, log,
+    inp = EpisodeInput(text, items, top, seed, catalog, log,
                        options or ArrangeOptions(), on_event)
     return run_episode(chosen, inp, episode, task=task, simulator=sim, planner=planner,
                        model=feasibility)

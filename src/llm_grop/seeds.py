@@ -12,6 +12,8 @@ stage                  what it seeds                                          pa
 ``llm.relations``      the Template 1 call of each attempt                    attempt
 ``llm.followup``       the follow-up call for a left-out object               attempt, k
 ``llm.distance``       the Template 2 call of the k-th relation                k
+``llm.edge``           the call asking the origin object's distance from the
+                       diner's edge of the table                              diner
 ``sampler``            the LLM-guided Gaussian rejection sampler (M configs)
 ``random_arrangement`` the baselines' random collision-free arrangement
 ``chairs``             the chairs sampled near the target table
@@ -37,6 +39,7 @@ STAGES: dict[str, int] = {
     "llm.relations": 1,
     "llm.followup": 2,
     "llm.distance": 3,
+    "llm.edge": 4,
     "sampler": 10,
     "random_arrangement": 11,
     "chairs": 12,

@@ -8,8 +8,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from llm_grop.arrangement.geometry import (
+    ACROSS_SIGMA_M,
     DEFAULT_GAP_M,
     FREE_SIGMA_M,
+    GAP_SIGMA_M,
     STACK_SIGMA_M,
     choose_origin,
     guided_layout,
@@ -58,7 +60,7 @@ def test_fork_left_of_plate_is_a_gap_between_edges() -> None:
     x, y = lay.positions["dinner fork"]
     assert x == pytest.approx(-(0.02 + 0.135 + 0.0125))
     assert y == 0.0
-    assert lay.sigma["dinner fork"] == (0.03, 0.01)
+    assert lay.sigma["dinner fork"] == (GAP_SIGMA_M, ACROSS_SIGMA_M)
     assert lay.sigma["dinner plate"] == FREE_SIGMA_M
 
 
@@ -71,14 +73,14 @@ def test_diagonals_move_on_both_axes_by_the_same_gap(relation: str, sx: int, sy:
     lay = guided_layout(items("dinner plate", "mug"), [r], {r.key(): 0.03}, TABLE)
     assert lay.positions["mug"] == pytest.approx((sx * (0.03 + 0.045 + 0.135),
                                                   sy * (0.03 + 0.045 + 0.135)))
-    assert lay.sigma["mug"] == (0.03, 0.03)
+    assert lay.sigma["mug"] == (GAP_SIGMA_M, GAP_SIGMA_M)
 
 
 def test_above_moves_on_y_only() -> None:
     r = rel("water cup", "above", "dinner plate")
     lay = guided_layout(items("dinner plate", "water cup"), [r], {r.key(): 0.01}, TABLE)
     assert lay.positions["water cup"] == pytest.approx((0.0, 0.01 + 0.04 + 0.135))
-    assert lay.sigma["water cup"] == (0.01, 0.03)
+    assert lay.sigma["water cup"] == (ACROSS_SIGMA_M, GAP_SIGMA_M)
 
 
 def test_relations_are_walked_backwards_as_their_converse() -> None:
@@ -88,7 +90,7 @@ def test_relations_are_walked_backwards_as_their_converse() -> None:
                         [rel("dinner plate", "center"), r], {r.key(): 0.04}, TABLE)
     assert lay.origin == "dinner plate"
     assert lay.positions["water cup"] == pytest.approx((0.0, -(0.04 + 0.04 + 0.135)))
-    assert lay.sigma["water cup"] == (0.01, 0.03)
+    assert lay.sigma["water cup"] == (ACROSS_SIGMA_M, GAP_SIGMA_M)
 
 
 def test_chain_of_relations_accumulates_and_missing_gap_defaults() -> None:

@@ -36,9 +36,16 @@ def test_consistent_answer_gives_valid_configurations(chat_server) -> None:
         assert violations(config, result.arrangement.relations, result.arrangement.table) == []
     pos = {p.name: p for p in result.arrangement.placements}
     assert pos["dinner fork"].x < pos["dinner plate"].x < pos["dinner knife"].x
-    # 1 Template 1 prompt, 2 Template 2 prompts (center needs no distance).
-    assert len(result.arrangement.llm.calls) == 3
+    # 1 Template 1 prompt, 2 Template 2 prompts (center needs no distance), and the
+    # plate's distance from the diner's edge.
+    assert len(result.arrangement.llm.calls) == 4
+    assert "edge of the table nearest the diner" in result.arrangement.llm.calls[-1].prompt
     assert result.gaps_m[("dinner fork", "to the left of", "dinner plate")] == pytest.approx(0.03)
+    assert result.edge_gap_m == pytest.approx(0.03)
+    for config, fid in zip(result.configurations, result.fidelity, strict=True):
+        plate = config.by_name()["dinner plate"]
+        assert plate.y - 0.135 + 0.3 == pytest.approx(0.03, abs=0.015)
+        assert fid.max_gap_error_m <= 0.015
 
 
 def test_same_seed_same_json(chat_server) -> None:

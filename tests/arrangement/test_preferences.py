@@ -8,10 +8,17 @@ import pytest
 
 from llm_grop import BackendOptions, arrange
 from llm_grop.arrangement.pipeline import ArrangeOptions
+from llm_grop.arrangement.preferences import read_edge_preferences
 from llm_grop.arrangement.sampling import violations
 from llm_grop.cli import main
 from llm_grop.errors import BadInput
+from llm_grop.world.catalog import Catalog
+from llm_grop.world.request import items_from_names
+from llm_grop.world.table import Table
 from scripted import TASK1_GOOD, scripted
+
+CATALOG = Catalog.load(use_env=False)
+ITEMS = tuple(items_from_names(["dinner plate", "dinner fork", "dinner knife"], CATALOG))
 
 REQUEST = "a dinner plate, a dinner fork and a dinner knife"
 #: An LLM with the fork and knife on the wrong sides.
@@ -91,7 +98,34 @@ def test_a_stated_distance_replaces_template_2(chat_server) -> None:
     gaps = result.gaps_m
     assert gaps[("dinner fork", "to the left of", "dinner plate")] == pytest.approx(0.02)
     assert gaps[("dinner knife", "to the right of", "dinner plate")] == pytest.approx(0.09)
-    assert len(result.arrangement.llm.calls) == 1
+    # Template 2 for the knife, and the plate's distance from the diner's edge.
+    assert len(result.arrangement.llm.calls) == 2
+
+
+def test_a_stated_distance_from_the_edge_replaces_the_question(chat_server) -> None:
+    chat_server.reply = scripted([SWAPPED], distance="About 9 centimeters.")
+    result = _arrange(chat_server, ArrangeOptions(preference_pool=(
+        "the dinner fork 2 cm to the left of the dinner plate",
+        "the dinner knife 2 cm to the right of the dinner plate",
+        "the plate 4 cm from the diner's edge of the table",
+        "the mug 1 cm from the edge")))
+    assert result.edge_gap_m == pytest.approx(0.04)
+    assert result.layout.origin == "dinner plate"
+    assert result.arrangement.llm.calls == ()
+    for config in result.configurations:
+        plate = config.by_name()["dinner plate"]
+        assert plate.y - 0.135 + 0.3 == pytest.approx(0.04, abs=0.015)
+
+
+@pytest.mark.parametrize("sentence, error", [
+    ("the dinner plate from the diner's edge", "no distance from the edge"),
+    ("the dinner plate -3 cm from the diner's edge", "must not be negative"),
+    ("the dinner plate 90 cm from the edge", "does not fit"),
+    ("the mug 3 cm from the edge", "names no requested object"),
+])
+def test_bad_edge_preferences_are_one_line_errors(sentence: str, error: str) -> None:
+    with pytest.raises(BadInput, match=error):
+        read_edge_preferences([sentence], [], ITEMS, CATALOG, Table())
 
 
 @pytest.mark.parametrize(("sentence", "needle"), [

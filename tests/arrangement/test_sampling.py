@@ -99,7 +99,7 @@ def test_center_is_enforced_even_when_the_guided_position_breaks_it() -> None:
 
 
 def test_table_too_small_for_the_footprints() -> None:
-    with pytest.raises(Infeasible, match=r"^no feasible arrangement: the 0\.30 x 0\.30 m table "
+    with pytest.raises(Infeasible, match=r"^no feasible arrangement: the 0\.3 x 0\.3 m table "
                        r"is too small for dinner plate, fruit bowl, bread plate \(needs about "
                        r"0\.10 m² of footprint; has 0\.09 m²\)$"):
         sample(items("dinner plate", "fruit bowl", "bread plate"), [], Table(0.3, 0.3))
@@ -117,7 +117,7 @@ def test_impossible_relations_on_a_narrow_table() -> None:
     rels = [rel("water cup", "above", "dinner plate")]
     with pytest.raises(Infeasible, match=r"^no feasible arrangement after \d+ samples "
                        r"\(0 of 25 configurations found\): most rejections were because "
-                       r"(water cup leaves the 0\.90 x 0\.30 m table|water cup is not above)"):
+                       r"(water cup leaves the 0\.9 x 0\.3 m table|water cup is not above)"):
         sample(its, rels, table, max_rounds=3)
 
 
@@ -148,9 +148,9 @@ def test_violations_name_every_problem() -> None:
     rels = [rel("dinner plate", "center"), rel("dinner fork", "to the left of", "dinner plate"),
             rel("mug lid", "on top of", "mug"), rel("bread", "below", "mug")]
     assert violations(config, rels, TABLE) == [
-        "dinner plate leaves the 0.90 x 0.60 m table",
-        "mug leaves the 0.90 x 0.60 m table",
-        "mug lid leaves the 0.90 x 0.60 m table",
+        "dinner plate leaves the 0.9 x 0.6 m table",
+        "mug leaves the 0.9 x 0.6 m table",
+        "mug lid leaves the 0.9 x 0.6 m table",
         "dinner plate overlaps dinner fork",
         "dinner plate is not in the center of the table",
         "dinner fork is not to the left of dinner plate",

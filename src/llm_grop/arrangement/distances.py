@@ -1,8 +1,12 @@
-"""Template 2 and the distance parser (paper §III-B).
+"""Template 2, the diner's-edge question, and the distance parser (paper §III-B).
 
 The LLM is asked how many centimetres separate two related objects; the answer
 is read as the **gap between the objects' edges** (see ``geometry``), as in the
-authors' code. How :func:`parse_distance_cm` reads an answer:
+authors' code. In the same style (:func:`edge_prompt`) it is asked how far the
+setting's origin object goes from the table's edge nearest the diner; the answer
+is read as the gap between that edge and the object's near edge, and when no
+number can be read :data:`DEFAULT_EDGE_GAP_CM` is used. How
+:func:`parse_distance_cm` reads an answer:
 
 * A number with a unit wins over numbers without one (list numbering, "Step 2").
   The first such distance in the text is taken.
@@ -27,6 +31,10 @@ from llm_grop.world.relation import CENTER, STACKING, Relation
 #: The gap used when an answer holds no readable distance, in centimetres
 #: (the authors' default).
 DEFAULT_GAP_CM = 5.0
+#: The gap, centimetres, between the diner's edge of the table and the origin object's
+#: near edge when the LLM's answer holds no readable distance (the same default as
+#: :data:`DEFAULT_GAP_CM`: no etiquette is assumed for it).
+DEFAULT_EDGE_GAP_CM = DEFAULT_GAP_CM
 #: Answers above this many centimetres are taken as unreadable.
 MAX_GAP_CM = 200.0
 
@@ -74,6 +82,14 @@ def template2_prompt(relation: Relation) -> str:
         A_subject=a_subject[0].upper() + a_subject[1:], subject=relation.subject,
         relation=relation.relation, a_reference=_a(relation.reference),
         reference=relation.reference).strip()
+
+
+def edge_prompt(subject: str) -> str:
+    """The Template 2-style question of how many centimetres from the diner's edge of the
+    table the origin object ``subject`` goes."""
+    a_subject = _a(subject)
+    return _asset("edge.txt").format(A_subject=a_subject[0].upper() + a_subject[1:],
+                                     subject=subject).strip()
 
 
 def template2_grammar() -> str:
@@ -131,7 +147,8 @@ def parse_distance_cm(text: str) -> float | None:
     return _in_range((low + high) / 2)
 
 
-def parse_distance_m(text: str) -> tuple[float, bool]:
-    """``(gap in metres, whether the default was used)`` for an answer to Template 2."""
+def parse_distance_m(text: str, default_cm: float = DEFAULT_GAP_CM) -> tuple[float, bool]:
+    """``(gap in metres, whether the default was used)`` for an answer to Template 2
+    (or to :func:`edge_prompt`, with ``default_cm`` :data:`DEFAULT_EDGE_GAP_CM`)."""
     cm = parse_distance_cm(text)
-    return ((DEFAULT_GAP_CM if cm is None else cm) / 100.0, cm is None)
+    return ((default_cm if cm is None else cm) / 100.0, cm is None)

@@ -9,8 +9,11 @@ Diagonal relations move on both axes by the same gap; cardinal ones keep the oth
 coordinate equal. A relation with no readable distance uses :data:`DEFAULT_GAP_M`.
 ``on top of`` puts the subject at its support's centre.
 
-The layout hangs off one origin object (:func:`choose_origin`) at the table centre
-(0, 0): the relation graph is walked breadth-first and undirected from it (a
+The layout hangs off one origin object (:func:`choose_origin`). With the diner's
+distance (``edge_gap_m``, from the LLM or a preference) the origin sits in front of
+the diner, centred on the diner's line of sight (x = 0), its near edge ``edge_gap_m``
+from the table's diner (-y) edge; without it, at the table's centre (0, 0). The relation
+graph is walked breadth-first and undirected from it (a
 relation is followed from its reference to its subject as stated, and from its
 subject to its reference as its converse). When a new position would overlap an
 object already placed, it is pushed further away from its reference in
@@ -25,17 +28,27 @@ No place-setting convention is used anywhere: positions follow only the relation
 Finally the whole layout is translated by the smallest shift, per axis, that brings
 every footprint inside the table (preferring one that keeps ``center`` objects in
 the middle of the table); on an axis where no shift fits, nothing moves.
+
+Each object but an origin is *anchored* to an object sampled before it (its support,
+else its nearest breadth-first ancestor earlier in the sampling order): the sampler
+draws it around its anchor's sampled position plus the guided offset, so a stated
+gap is kept however far the anchor moved. The sampler's spread (``sigma``) is
+:data:`GAP_SIGMA_M` along every axis on which a gap was stated (the gap's direction,
+and the origin's distance from the diner) and wider only across it, so that gaps
+stay within :data:`~llm_grop.arrangement.fidelity.GAP_TOLERANCE_M` of what was said
+while the configurations still differ (mostly by where the whole setting sits).
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from llm_grop.arrangement.fit import fit_circle, smallest_shift
 from llm_grop.arrangement.predicates import (
     CENTER_FRACTION,
     Footprint,
@@ -69,17 +82,29 @@ DEFAULT_GAP_M = 0.05
 #: Step, in metres, by which a position that overlaps a placed object is pushed outwards.
 PUSH_STEP_M = 0.01
 
-#: Sampling std dev ``(sx, sy)`` in metres by the relation that placed an object (the
-#: authors' values): tight across the direction of a cardinal relation, loose along it.
+#: Sampling std dev, metres, along an axis on which a gap was stated: a third of the
+#: fidelity tolerance, so that nearly every draw keeps the gap.
+GAP_SIGMA_M = 0.005
+
+#: Sampling std dev, metres, across a cardinal relation's direction (the authors' value).
+ACROSS_SIGMA_M = 0.01
+
+#: Sampling std dev ``(sx, sy)`` in metres, relative to the anchor, by the relation that
+#: placed an object: tight along the gap, looser across a cardinal relation's direction.
 SIGMA_BY_RELATION_M: Mapping[str, tuple[float, float]] = {
-    ABOVE: (0.01, 0.03), BELOW: (0.01, 0.03),
-    LEFT: (0.03, 0.01), RIGHT: (0.03, 0.01),
-    ABOVE_LEFT: (0.03, 0.03), ABOVE_RIGHT: (0.03, 0.03),
-    BELOW_LEFT: (0.03, 0.03), BELOW_RIGHT: (0.03, 0.03),
+    ABOVE: (ACROSS_SIGMA_M, GAP_SIGMA_M), BELOW: (ACROSS_SIGMA_M, GAP_SIGMA_M),
+    LEFT: (GAP_SIGMA_M, ACROSS_SIGMA_M), RIGHT: (GAP_SIGMA_M, ACROSS_SIGMA_M),
+    ABOVE_LEFT: (GAP_SIGMA_M, GAP_SIGMA_M), ABOVE_RIGHT: (GAP_SIGMA_M, GAP_SIGMA_M),
+    BELOW_LEFT: (GAP_SIGMA_M, GAP_SIGMA_M), BELOW_RIGHT: (GAP_SIGMA_M, GAP_SIGMA_M),
 }
 
-#: Std dev in metres for an origin, a ``center`` object or an unconnected one.
+#: Std dev in metres for an origin with no stated distance from the diner, or an
+#: unconnected group's origin (the authors' value).
 FREE_SIGMA_M = (0.03, 0.03)
+
+#: Std dev in metres for the origin placed at the diner's stated distance: free along
+#: the edge (where the whole setting sits), tight towards the diner.
+DINER_SIGMA_M = (FREE_SIGMA_M[0], GAP_SIGMA_M)
 
 #: Std dev in metres for an object resting on another: it follows its support's
 #: sampled position almost exactly. (An object placed as the support *under* a
@@ -96,7 +121,10 @@ class GuidedLayout:
     ``positions``: guided centre ``(x, y)`` per item. ``sigma``: Gaussian std dev
     ``(sx, sy)`` per item. ``support``: what each item rests on (``None``: the table).
     ``order``: the sampling order, the origin first, then breadth-first along the
-    relations; a support always comes before what it supports.
+    relations; a support always comes before what it supports. ``anchor``: the object,
+    earlier in ``order``, whose sampled position each item is drawn around (``None``: an
+    origin, drawn around its own position). ``edge_gap_m``: the origin's stated distance
+    from the diner's edge of the table (``None``: not stated; the origin is at the centre).
     """
 
     origin: str
@@ -104,10 +132,23 @@ class GuidedLayout:
     sigma: Mapping[str, tuple[float, float]]
     support: Mapping[str, str | None]
     order: tuple[str, ...]
+    anchor: Mapping[str, str | None] = field(default_factory=dict)
+    edge_gap_m: float | None = None
+
+    def offset(self, name: str) -> tuple[float, float]:
+        """``name``'s guided position relative to its anchor's (its own if it has none)."""
+        x, y = self.positions[name]
+        a = self.anchor.get(name)
+        if a is None:
+            return (x, y)
+        ax, ay = self.positions[a]
+        return (x - ax, y - ay)
 
 
-def choose_origin(items: Sequence[Item], relations: Sequence[Relation]) -> str:
-    """The subject of the first ``center`` relation, else the item with the largest
+def choose_origin(items: Sequence[Item], relations: Sequence[Relation],
+                  anchored: Collection[str] = ()) -> str:
+    """The subject of the first ``center`` relation, else the first item in ``anchored``
+    (objects whose distance from the diner was stated), else the item with the largest
     footprint (ties: the first in ``items``)."""
     if not items:
         raise BadInput("arrangement: no objects to place")
@@ -115,6 +156,9 @@ def choose_origin(items: Sequence[Item], relations: Sequence[Relation]) -> str:
     for r in relations:
         if r.relation == CENTER and r.subject in names:
             return r.subject
+    for it in items:
+        if it.name in anchored:
+            return it.name
     best = items[0]
     for it in items[1:]:
         if it.spec.area > best.spec.area:
@@ -171,6 +215,7 @@ class _Builder:
             self.adj[r.subject].append((r.reference, CONVERSE[r.relation], gap))
         self.pos: dict[str, tuple[float, float]] = {}
         self.sigma: dict[str, tuple[float, float]] = {}
+        self.parent: dict[str, str | None] = {}
 
     def component(self, start: str) -> list[str]:
         """Every item the relations connect to ``start``, breadth-first from it."""
@@ -182,10 +227,12 @@ class _Builder:
                     queue.append(q)
         return seen
 
-    def place_from(self, origin: str) -> list[str]:
-        """Lays out ``origin``'s group around (0, 0); returns its members in BFS order."""
-        self.pos[origin] = (0.0, 0.0)
-        self.sigma[origin] = FREE_SIGMA_M
+    def place_from(self, origin: str, at: tuple[float, float] = (0.0, 0.0),
+                   sigma: tuple[float, float] = FREE_SIGMA_M) -> list[str]:
+        """Lays out ``origin``'s group around ``at``; returns its members in BFS order."""
+        self.pos[origin] = at
+        self.sigma[origin] = sigma
+        self.parent[origin] = None
         order, queue = [origin], deque([origin])
         while queue:
             p = queue.popleft()
@@ -193,6 +240,7 @@ class _Builder:
                 if q in self.pos:
                     continue
                 self.pos[q] = self._position(q, rel, p, gap, order)
+                self.parent[q] = p
                 if rel == ON_TOP_OF:
                     self.sigma[q] = STACK_SIGMA_M
                 elif rel == UNDER:
@@ -250,25 +298,29 @@ class _Builder:
             self.pos[n] = (x + dx, y + dy)
 
 
-def _smallest_shift(lo: float, hi: float, prefer: tuple[float, float] | None) -> float:
-    """The shift nearest 0 within ``[lo, hi]`` (and within ``prefer`` if they meet)."""
-    if lo > hi:
-        return 0.0
-    if prefer is not None and max(lo, prefer[0]) <= min(hi, prefer[1]):
-        lo, hi = max(lo, prefer[0]), min(hi, prefer[1])
-    return min(max(0.0, lo), hi)
-
-
 def guided_layout(items: Sequence[Item], relations: Sequence[Relation],
-                  gaps_m: Mapping[Key, float], table: Table) -> GuidedLayout:
+                  gaps_m: Mapping[Key, float], table: Table, edge_gap_m: float | None = None,
+                  origin: str | None = None) -> GuidedLayout:
     """The LLM-guided position and sampling std dev of every item (see the module doc).
 
-    ``gaps_m`` maps :meth:`Relation.key` to the LLM's gap between edges in metres.
+    ``gaps_m`` maps :meth:`Relation.key` to the LLM's gap between edges in metres;
+    ``edge_gap_m`` is the origin's distance, metres, from the diner's edge of the table
+    (``None``: the origin goes to the table's centre); ``origin`` overrides
+    :func:`choose_origin`.
     """
     _validate(items, relations)
+    if edge_gap_m is not None and not 0 <= edge_gap_m <= table.depth:
+        raise BadInput(f"arrangement: the distance from the diner's edge must lie within the "
+                       f"table's depth ({table.depth:g} m), got {edge_gap_m:g} m")
     b = _Builder(items, relations, gaps_m, table)
-    origin = choose_origin(items, relations)
-    bfs = b.place_from(origin)
+    origin = origin if origin is not None else choose_origin(items, relations)
+    if origin not in b.foot:
+        raise BadInput(f"arrangement: the origin {origin!r} is not an object to place")
+    if edge_gap_m is None:
+        bfs = b.place_from(origin)
+    else:
+        at_y = -table.depth / 2 + edge_gap_m + b.foot[origin].hy
+        bfs = b.place_from(origin, (0.0, at_y), DINER_SIGMA_M)
     main = list(bfs)
     groups: list[list[str]] = []
     for it in items:
@@ -315,9 +367,20 @@ def guided_layout(items: Sequence[Item], relations: Sequence[Relation],
             limit = CENTER_FRACTION * 2 * half
             prefer = (max(-limit - b.pos[n][axis] for n in centred),
                       min(limit - b.pos[n][axis] for n in centred))
-        shift.append(_smallest_shift(lo, hi, prefer))
+        shift.append(smallest_shift(lo, hi, prefer))
     b.translate(order, shift[0], shift[1])
+    if table.is_round:
+        fit_circle(b.pos, b.foot, order, table.radius)
 
+    rank = {n: k for k, n in enumerate(order)}
+    anchor: dict[str, str | None] = {}
+    for name in order:
+        up = support[name]
+        if up is None:
+            up = b.parent.get(name)
+            while up is not None and rank[up] > rank[name]:
+                up = b.parent.get(up)
+        anchor[name] = up
     names = [it.name for it in items]
     return GuidedLayout(
         origin=origin,
@@ -325,4 +388,6 @@ def guided_layout(items: Sequence[Item], relations: Sequence[Relation],
         sigma={n: b.sigma[n] for n in names},
         support={n: support[n] for n in names},
         order=tuple(order),
+        anchor={n: anchor[n] for n in names},
+        edge_gap_m=edge_gap_m,
     )

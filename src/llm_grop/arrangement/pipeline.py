@@ -2,7 +2,8 @@
 
 request items -> Template 1 -> parsed relations (+ follow-ups for left-out objects)
 -> clingo consistency check (re-prompt with a new seed on conflict, bounded)
--> Template 2 distances -> LLM-guided positions -> M sampled configurations.
+-> Template 2 distances, and the origin object's distance from the diner's edge
+-> LLM-guided positions -> M sampled configurations, each measured for fidelity.
 """
 
 from __future__ import annotations
@@ -11,19 +12,26 @@ import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+from shapely.geometry import Polygon
+
 from llm_grop import seeds
 from llm_grop.arrangement import (
     consistency,
+    diners,
     distances,
+    fidelity,
     geometry,
     preferences,
     relations,
     sampling,
 )
-from llm_grop.errors import LLMError
+from llm_grop.arrangement.setting import Attempt, Sampled, Setting
+from llm_grop.errors import Infeasible, LLMError, ReplayMissing
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
+from llm_grop.world.fidelity import Fidelity
 from llm_grop.world.llmlog import LLMSummary
 from llm_grop.world.relation import CENTER, STACKING, Relation
 from llm_grop.world.table import Table
@@ -41,7 +49,9 @@ class ArrangeOptions:
     examples; ``""``: zero-shot). ``notes``: Template 1's [notes] slot.
     ``reprompt_temperature_step``: added to the temperature at each re-prompt
     (capped at 1.0), because at the paper's 0.1 a new seed alone rarely changes
-    the answer.
+    the answer. ``gap_tolerance_m``: every configuration keeps each stated gap and the
+    diner's distance within this many metres (``None``: no such check; see
+    :mod:`llm_grop.arrangement.fidelity`).
     """
 
     m: int = 25
@@ -52,21 +62,7 @@ class ArrangeOptions:
     reprompt_temperature_step: float = 0.3
     preferences: tuple[str, ...] = ()
     preference_pool: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class Attempt:
-    """One Template 1 answer: what was read from it and what clingo said."""
-
-    seed: int
-    relations: tuple[Relation, ...]
-    conflict: tuple[Relation, ...]
-    ignored: tuple[str, ...]
-
-    @property
-    def consistent(self) -> bool:
-        """Usable as it is: at least one relation and no conflict."""
-        return bool(self.relations) and not self.conflict
+    gap_tolerance_m: float | None = fidelity.GAP_TOLERANCE_M
 
 
 @dataclass(frozen=True)
@@ -75,7 +71,9 @@ class ArrangementResult:
 
     ``arrangement`` holds the first configuration; ``configurations`` all M of
     them (the planner chooses among these); ``dropped`` the LLM lines left out
-    to restore consistency.
+    to restore consistency; ``gaps_m`` the stated gaps by relation key; ``edge_gap_m``
+    the origin's stated distance from the diner's edge; ``fidelity`` one measure per
+    configuration.
     """
 
     arrangement: Arrangement
@@ -84,6 +82,8 @@ class ArrangementResult:
     attempts: tuple[Attempt, ...]
     dropped: tuple[Relation, ...]
     gaps_m: dict[tuple[str, str, str | None], float]
+    edge_gap_m: float | None = None
+    fidelity: tuple[Fidelity, ...] = ()
 
 
 def _dedupe(rels: Sequence[Relation]) -> list[Relation]:
@@ -148,21 +148,10 @@ def _choose_relations(attempts: Sequence[Attempt]) -> tuple[tuple[Relation, ...]
     return best, [r for r in best_source if r.key() not in kept]
 
 
-def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Catalog,
-                  table: Table, seed: int = 0, options: ArrangeOptions | None = None,
-                  on_event: Callable[[str], None] | None = None) -> ArrangementResult:
-    """Arrange ``items`` on ``table``: relations from the LLM, checked, grounded and sampled.
-
-    Raises :class:`~llm_grop.errors.LLMError` when no attempt yields a usable
-    relation and :class:`~llm_grop.errors.Infeasible` when no configuration fits.
-    """
-    options = options or ArrangeOptions()
-    def say(message: str) -> None:
-        log.info(message)
-        if on_event is not None:
-            on_event(message)
-
-    first_call = len(llm.calls)
+def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Table, seed: int,
+              options: ArrangeOptions, say: Callable[[str], None]) -> Setting:
+    """Relations (Template 1, preferences, clingo), gaps (Template 2) and the diner's
+    distance for one setting of ``items`` on a place of ``table``'s size."""
     warnings: list[str] = []
     attempts: list[Attempt] = []
     accepted: tuple[Relation, ...] = ()
@@ -216,14 +205,125 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
         if defaulted:
             warnings.append(f"no distance in {record.response.strip()!r}; used "
                             f"{distances.DEFAULT_GAP_CM:g} cm for: {rel.sentence()}")
+    origin, edge_gap = _edge_distance(items, accepted, llm, catalog, table, seed, options, say,
+                                      warnings)
+    return Setting(accepted, gaps, origin, edge_gap, tuple(attempts), tuple(dropped),
+                    tuple(warnings))
 
-    say("sampling configurations")
-    layout = geometry.guided_layout(items, accepted, gaps, table)
-    configs = sampling.sample_configurations(items, layout, accepted, table,
-                                             seeds.stream(seed, "sampler"), m=options.m)
+
+def _edge_distance(items: Sequence[Item], accepted: Sequence[Relation], llm: CallLog,
+                   catalog: Catalog, table: Table, seed: int, options: ArrangeOptions,
+                   say: Callable[[str], None], warnings: list[str]) -> tuple[str, float]:
+    """The layout's origin and its distance, metres, from the diner's edge: a preference's,
+    else the LLM's answer, else :data:`~llm_grop.arrangement.distances.DEFAULT_EDGE_GAP_CM`."""
+    edges = preferences.read_edge_preferences(options.preferences, options.preference_pool,
+                                              items, catalog, table)
+    origin = geometry.choose_origin(items, accepted, anchored=edges)
+    warnings += [f"unused: a distance from the diner's edge applies to the origin "
+                 f"({origin}), not to {name}" for name in edges if name != origin]
+    if origin in edges:
+        return origin, edges[origin]
+    say(f"asking {llm.model} for the distance of the {origin} from the diner's edge")
+    try:
+        answer = llm.complete(distances.edge_prompt(origin),
+                              options.params.with_seed(seeds.int_seed(seed, "llm.edge", 0)),
+                              distances.template2_grammar()).response
+    except ReplayMissing:
+        # Recordings made before llm-grop asked this question still replay.
+        warnings.append(f"the replayed recording has no answer to the diner's-edge question "
+                        f"(recorded before llm-grop 0.4); used "
+                        f"{distances.DEFAULT_EDGE_GAP_CM:g} cm for the {origin}")
+        return origin, distances.DEFAULT_EDGE_GAP_CM / 100
+    edge_gap, defaulted = distances.parse_distance_m(answer, distances.DEFAULT_EDGE_GAP_CM)
+    if edge_gap > table.depth / 2:
+        warnings.append(f"{100 * edge_gap:g} cm from the diner's edge is beyond the middle "
+                        f"of the {table.depth:g} m deep place; used "
+                        f"{distances.DEFAULT_EDGE_GAP_CM:g} cm for the {origin}")
+        edge_gap = distances.DEFAULT_EDGE_GAP_CM / 100
+    elif defaulted:
+        warnings.append(f"no distance in {answer.strip()[:80]!r}; used "
+                        f"{distances.DEFAULT_EDGE_GAP_CM:g} cm from the diner's edge "
+                        f"for the {origin}")
+    return origin, edge_gap
+
+
+def sample_setting(items: Sequence[Item], setting: Setting, table: Table,
+                   rng: Callable[[], np.random.Generator], options: ArrangeOptions,
+                   region: Polygon | None = None) -> Sampled:
+    """The guided layout and M configurations of ``items`` on ``table`` (a diner's place
+    box, with its exact ``region``), each measured for fidelity. ``rng`` makes a fresh
+    generator: a draw without the gap tolerance starts from the same state."""
+    warnings = []
+    rels, gaps = setting.relations, setting.gaps
+    layout = geometry.guided_layout(items, rels, gaps, table, setting.edge_gap_m, setting.origin)
+    tol = options.gap_tolerance_m
+    warnings += [f"the other relations keep {r.subject} {r.relation} {r.reference} "
+                 f"from its stated {100 * gaps[r.key()]:g} cm"
+                 for r in rels if tol is not None and r.key() in gaps
+                 and not sampling.realisable(layout, r, gaps[r.key()], items, tol)]
+    try:
+        configs = sampling.sample_configurations(items, layout, rels, table, rng(),
+                                                 m=options.m, gaps_m=gaps, tolerance_m=tol,
+                                                 region=region)
+    except Infeasible:
+        if tol is None:
+            raise
+        warnings.append(f"no configuration keeps every stated gap within {100 * tol:g} cm; "
+                        "sampled without that tolerance")
+        configs = sampling.sample_configurations(items, layout, rels, table, rng(),
+                                                 m=options.m, gaps_m=gaps, tolerance_m=None,
+                                                 region=region)
+    measured = tuple(fidelity.measure(c, rels, gaps, layout, table) for c in configs)
+    return Sampled(layout, configs, measured, tuple(warnings))
+
+
+def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Catalog,
+                  table: Table, seed: int = 0, options: ArrangeOptions | None = None,
+                  on_event: Callable[[str], None] | None = None) -> ArrangementResult:
+    """Arrange ``items`` on ``table``: relations from the LLM, checked, grounded and sampled.
+
+    Items with a ``diner`` index are several diners' settings (``table.diners`` seats them):
+    the LLM is asked once per distinct setting, and each diner's setting is laid out and
+    sampled in that diner's place (:mod:`llm_grop.arrangement.diners`).
+
+    Raises :class:`~llm_grop.errors.LLMError` when no attempt yields a usable
+    relation and :class:`~llm_grop.errors.Infeasible` when no configuration fits.
+    """
+    options = options or ArrangeOptions()
+    def say(message: str) -> None:
+        log.info(message)
+        if on_event is not None:
+            on_event(message)
+
+    first_call = len(llm.calls)
+    if any(it.diner is not None for it in items):
+        several = diners.arrange_diners(
+            items, table, catalog, seed, say,
+            lambda base, box: _symbolic(base, llm, catalog, box, seed, options, say),
+            lambda its, st, box, rng, region: sample_setting(its, st, box, rng, options,
+                                                             region))
+        relations_all = tuple(r for s in several.settings for r in s.relations)
+        warnings = tuple(w for s in several.distinct for w in s.warnings) + \
+            tuple(w for s in several.sampled for w in s.warnings)
+        attempts = tuple(a for s in several.distinct for a in s.attempts)
+        dropped = tuple(r for s in several.distinct for r in s.dropped)
+        gaps = {k: v for s in several.settings for k, v in s.gaps.items()}
+        layout, edge_gap = several.sampled[0].layout, several.settings[0].edge_gap_m
+        configs, measured = several.configurations, several.fidelity
+    else:
+        setting = _symbolic(items, llm, catalog, table, seed, options, say)
+        say("sampling configurations")
+        one = sample_setting(items, setting, table, lambda: seeds.stream(seed, "sampler"),
+                             options)
+        relations_all, layout, configs, measured = setting.relations, one.layout, \
+            one.configurations, one.fidelity
+        warnings = setting.warnings + one.warnings
+        attempts, dropped, gaps = setting.attempts, setting.dropped, setting.gaps
+        edge_gap = setting.edge_gap_m
     arrangement = Arrangement(
-        request=request, table=table, placements=configs[0].placements, relations=accepted,
+        request=request, table=table, placements=configs[0].placements,
+        relations=relations_all,
         llm=LLMSummary(llm.backend, llm.model, tuple(llm.calls[first_call:])),
-        warnings=tuple(warnings),
-        conflicts=tuple(a.conflict for a in attempts if a.conflict))
-    return ArrangementResult(arrangement, configs, layout, tuple(attempts), tuple(dropped), gaps)
+        warnings=warnings, conflicts=tuple(a.conflict for a in attempts if a.conflict))
+    return ArrangementResult(arrangement, tuple(configs), layout, attempts, dropped, gaps,
+                             edge_gap, tuple(measured))

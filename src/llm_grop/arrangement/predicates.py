@@ -128,16 +128,40 @@ def pair_relation_holds(relation: str, xs: ArrayLike, ys: ArrayLike, fs: Footpri
 
 
 def in_center(x: ArrayLike, y: ArrayLike, table: Table, margin: float = 0.0) -> Bools:
-    """Whether ``center`` holds for an object centred at ``(x, y)``."""
+    """Whether ``center`` holds for an object centred at ``(x, y)``.
+
+    On a round table of diameter ``D`` the middle is a disc: the centre lies within
+    ``CENTER_FRACTION * D`` metres of the table's centre (half the radius).
+    """
+    if table.is_round:
+        reach = CENTER_FRACTION * table.width - margin
+        return _within_radius(x, y, reach)
     return ((np.abs(x) <= CENTER_FRACTION * table.width - margin)
             & (np.abs(y) <= CENTER_FRACTION * table.depth - margin))
 
 
 def inside_table(x: ArrayLike, y: ArrayLike, f: Footprint, table: Table,
                  margin: float = 0.0) -> Bools:
-    """Whether footprint ``f`` centred at ``(x, y)`` lies on the table top."""
+    """Whether footprint ``f`` centred at ``(x, y)`` lies on the table top.
+
+    On a round table a circular footprint must lie within the top's radius, and a box's
+    bounding box must have all four corners within it (its farthest corner decides).
+    """
+    if table.is_round:
+        if f.shape == "circle":
+            return _within_radius(x, y, table.radius - f.hx - margin)
+        return _within_radius(np.abs(x) + f.hx, np.abs(y) + f.hy, table.radius - margin)
     return ((np.abs(x) <= table.width / 2 - f.hx - margin)
             & (np.abs(y) <= table.depth / 2 - f.hy - margin))
+
+
+def _within_radius(x: ArrayLike, y: ArrayLike, reach: float) -> Bools:
+    """Whether each point ``(x, y)`` lies within ``reach`` metres of the origin (none does
+    for a negative ``reach``)."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if reach < 0:
+        return np.zeros(np.broadcast(x, y).shape, dtype=bool)
+    return x * x + y * y <= reach * reach
 
 
 def clear_of(x1: ArrayLike, y1: ArrayLike, f1: Footprint, x2: ArrayLike, y2: ArrayLike,

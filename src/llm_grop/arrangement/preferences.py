@@ -8,6 +8,10 @@ is one that clingo finds inconsistent with the preferences. When the preferences
 every requested object, Template 1 is not asked at all. A preference that states a
 distance ("the dinner fork 2 cm to the left of the dinner plate") sets that gap, and
 Template 2 is asked only for the others.
+
+A preference may also say how far an object goes from the diner's edge of the table
+("the dinner plate 3 cm from the diner's edge"): that object becomes the origin of the
+layout (:mod:`llm_grop.arrangement.geometry`) and the LLM is not asked for the distance.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ from pathlib import Path
 import yaml
 
 from llm_grop.arrangement import consistency
-from llm_grop.arrangement.distances import parse_distance_m
+from llm_grop.arrangement.distances import parse_distance_cm, parse_distance_m
 from llm_grop.arrangement.relations import parse_relations
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item
@@ -27,6 +31,73 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.relation import Relation
 from llm_grop.world.request import items_from_names
 from llm_grop.world.table import Table
+
+#: "... from the diner's edge", "... from the near edge of the table", "... from the edge".
+_EDGE = re.compile(r"\bfrom\s+the\s+(?:diner['’]?s\s+|near(?:est)?\s+)?edge\b", re.IGNORECASE)
+
+
+def is_edge_sentence(sentence: str) -> bool:
+    """Whether ``sentence`` states a distance from the diner's edge of the table."""
+    return _EDGE.search(sentence) is not None
+
+
+def _edge_object(head: str, items: Sequence[Item], catalog: Catalog) -> tuple[Item, str] | None:
+    """The requested item ``head`` names first, with the text after its name."""
+    text = " " + re.sub(r"\s+", " ", head.lower()) + " "
+    best: tuple[int, Item, str] | None = None
+    phrases = [(it.name, it) for it in items]
+    phrases += [(alias, it) for alias, kind in catalog.aliases().items() for it in items
+                if it.kind == kind]
+    for phrase, item in phrases:
+        at = text.find(f" {phrase} ")
+        if at < 0:
+            at = text.find(f" {phrase}s ")
+        if at < 0:
+            continue
+        rank = (at, -len(phrase))
+        if best is None or rank < (best[0], -len(best[2])):
+            best = (at, item, phrase)
+    if best is None:
+        return None
+    at, item, phrase = best
+    rest = text[at + len(phrase) + 1:]
+    return item, rest
+
+
+def read_edge_preferences(required: Sequence[str], pool: Sequence[str],
+                          items: Sequence[Item], catalog: Catalog, table: Table
+                          ) -> dict[str, float]:
+    """The distance, metres, from the diner's edge of the table to the near edge of each
+    object an edge sentence names (see :func:`is_edge_sentence`), by item name.
+
+    ``required`` sentences must name a requested object (else :class:`BadInput`);
+    ``pool`` sentences apply when their object is requested. Raises :class:`BadInput`
+    for a sentence without a distance, a negative one, or one deeper than the table.
+    """
+    out: dict[str, float] = {}
+    for required_one, sentence in [(True, s) for s in required] + [(False, s) for s in pool]:
+        m = _EDGE.search(sentence)
+        if m is None:
+            continue
+        where = "--prefer" if required_one else "preferences"
+        found = _edge_object(sentence[:m.start()], items, catalog)
+        if found is None:
+            if required_one:
+                raise BadInput(f"--prefer: {sentence!r} names no requested object "
+                               f"({', '.join(i.name for i in items)})")
+            continue
+        item, rest = found
+        if re.search(r"(?<![\w.])[-−]\s*\d", rest):
+            raise BadInput(f"{where} {sentence!r}: a distance must not be negative")
+        cm = parse_distance_cm(rest)
+        if cm is None:
+            raise BadInput(f"{where} {sentence!r}: no distance from the edge, such as "
+                           "'3 cm from the diner's edge'")
+        if cm / 100 > table.depth:
+            raise BadInput(f"{where} {sentence!r}: {cm:g} cm does not fit on the "
+                           f"{table.label}")
+        out.setdefault(item.name, cm / 100)
+    return out
 
 
 def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequence[Item],
@@ -36,6 +107,8 @@ def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequen
 
     Raises :class:`BadInput` when the preferences contradict each other.
     """
+    required = [s for s in required if not is_edge_sentence(s)]
+    pool = [s for s in pool if not is_edge_sentence(s)]
     out: list[Relation] = []
     for sentence in required:
         parsed = parse_relations(sentence, items, catalog)
@@ -105,7 +178,7 @@ def stated_gaps(preferences: Sequence[Relation], table: Table
             continue
         if gap_m > max(table.width, table.depth):
             raise BadInput(f"preference {line!r}: {100 * gap_m:g} cm does not fit on the "
-                           f"{table.width:g} x {table.depth:g} m table")
+                           f"{table.label}")
         out[r.key()] = gap_m
     return out
 

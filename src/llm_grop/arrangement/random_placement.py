@@ -1,9 +1,10 @@
 """Random collision-free placement on the table: the arrangement of the TPRA and GROP
 baselines (paper §IV), which know no semantics.
 
-Each object is drawn uniformly over the positions where it lies wholly on the table, and
-redrawn while it overlaps one already placed (the sampler's footprint test, sizes
-inflated 5%). Nothing is stacked: without relations nothing says what rests on what.
+Each object is drawn uniformly over the positions where it lies wholly on the table (a
+round one's too), and redrawn while it overlaps one already placed (the sampler's
+footprint test, sizes inflated 5%). Nothing is stacked: without relations nothing says
+what rests on what.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from llm_grop.arrangement.predicates import Footprint, clear_of
+from llm_grop.arrangement.predicates import Footprint, clear_of, inside_table
 from llm_grop.errors import Infeasible
 from llm_grop.world.arrangement import Configuration, Item, Placement
 from llm_grop.world.table import Table
@@ -30,9 +31,8 @@ def random_configurations(items: Sequence[Item], table: Table, rng: np.random.Ge
     order = sorted(range(len(items)), key=lambda i: -Footprint.of_spec(items[i].spec).area)
     feet = [Footprint.of_spec(it.spec) for it in items]
     for i in order:
-        if feet[i].hx * 2 > table.width or feet[i].hy * 2 > table.depth:
-            raise Infeasible(f"{items[i].name!r} does not fit on the "
-                             f"{table.width:.2f} x {table.depth:.2f} m table")
+        if not inside_table(0.0, 0.0, feet[i], table):
+            raise Infeasible(f"{items[i].name!r} does not fit on the {table.label}")
     return tuple(_one(items, feet, order, table, rng) for _ in range(m))
 
 
@@ -44,7 +44,8 @@ def _one(items: Sequence[Item], feet: Sequence[Footprint], order: Sequence[int],
             f = feet[i]
             cx = rng.uniform(-(table.width / 2 - f.hx), table.width / 2 - f.hx, BATCH)
             cy = rng.uniform(-(table.depth / 2 - f.hy), table.depth / 2 - f.hy, BATCH)
-            ok = np.ones(BATCH, dtype=bool)
+            # Drawn over the bounding rectangle; on a round top, kept only on the circle.
+            ok = inside_table(cx, cy, f, table)
             for j, (x, y) in xy.items():
                 ok &= clear_of(cx, cy, f, x, y, feet[j])
             hits = np.flatnonzero(ok)
@@ -54,6 +55,6 @@ def _one(items: Sequence[Item], feet: Sequence[Footprint], order: Sequence[int],
         else:
             return Configuration(tuple(
                 Placement(it.name, xy[i][0], xy[i][1], 0.0, it.spec.shape, it.spec.size, None,
-                          it.kind, it.spec.height) for i, it in enumerate(items)))
+                          it.kind, it.spec.height, it.diner) for i, it in enumerate(items)))
     raise Infeasible(f"could not place {len(items)} objects at random without overlaps on the "
-                     f"{table.width:.2f} x {table.depth:.2f} m table in {MAX_TRIES} tries")
+                     f"{table.label} in {MAX_TRIES} tries")

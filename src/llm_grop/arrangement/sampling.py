@@ -4,9 +4,14 @@ Objects are sampled one at a time in the layout's order. For an object, every
 unfinished configuration draws ``batch`` candidates from N(guided position,
 diag(sigma²)) at once (arrays of shape ``(configurations, batch)``); a candidate is
 rejected when it breaks an accepted relation with an object already placed in its
-configuration (``center`` included), overlaps one (stacking chains excepted) or
-leaves the table. Each configuration keeps its first surviving candidate. An object
-resting on another is drawn around its support's *sampled* position.
+configuration (``center`` included), overlaps one (stacking chains excepted),
+leaves the table, or (with a tolerance) realises a stated gap or the diner's distance
+more than the tolerance away from what was said (:mod:`llm_grop.arrangement.fidelity`).
+Each configuration keeps its first surviving candidate. An object is drawn around its
+anchor's *sampled* position plus its guided offset (see
+:class:`~llm_grop.arrangement.geometry.GuidedLayout`), so that the gap to the object it
+was laid out from holds wherever that one landed; an origin is drawn around its guided
+position.
 
 Adaptive: a configuration with no surviving candidate draws again with sigma
 widened by :data:`WIDEN_FACTOR` (capped at half the table), up to
@@ -24,13 +29,20 @@ from __future__ import annotations
 
 import math
 from collections import Counter, defaultdict
-from collections.abc import Callable, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
+from shapely.geometry import Polygon
 
-from llm_grop.arrangement.geometry import GuidedLayout
+from llm_grop.arrangement.fidelity import (
+    GAP_TOLERANCE_M,
+    edge_gap_m,
+    has_gap,
+    realised_gap_m,
+)
+from llm_grop.arrangement.geometry import GuidedLayout, Key
 from llm_grop.arrangement.predicates import (
     Footprint,
     clear_of,
@@ -41,9 +53,20 @@ from llm_grop.arrangement.predicates import (
     rests_on_edges,
     stacked_pairs,
 )
+from llm_grop.arrangement.sampler_checks import (
+    SAMPLE_MARGIN_M,
+    Check,
+    center_check,
+    clear_check,
+    edge_check,
+    gap_check,
+    pair_check,
+    region_check,
+)
 from llm_grop.errors import BadInput, Infeasible
+from llm_grop.geometry.places import inside_region
 from llm_grop.world.arrangement import Configuration, Item, Placement
-from llm_grop.world.relation import CENTER, Relation
+from llm_grop.world.relation import Relation
 from llm_grop.world.table import Table
 
 #: Each sigma is multiplied by this after a draw in which nothing survived.
@@ -61,72 +84,42 @@ ROUND_WIDEN = 1.25
 #: Rounds (a fresh start of the unfinished configurations) before giving up.
 DEFAULT_MAX_ROUNDS = 40
 
-#: Stricter-by margin in metres for accepting a candidate, so that results pass the
-#: exact checks of :func:`violations` even after rounding to 0.1 mm.
-SAMPLE_MARGIN_M = 1e-4
 
 Floats = NDArray[np.float64]
 Bools = NDArray[np.bool_]
-#: ``test(cx, cy, X, Y, rows)``: candidate x, y ``(A, K)``; positions so far ``(n, N)``;
-#: the configurations ``rows`` ``(A,)`` the candidates belong to -> accepted ``(A, K)``.
-Test = Callable[[Floats, Floats, Floats, Floats, NDArray[np.intp]], Bools]
-
-
-@dataclass(frozen=True)
-class _Check:
-    reason: str
-    test: Test
 
 
 @dataclass(frozen=True)
 class _Step:
-    """How one object is sampled: its column, mean, std dev and checks."""
+    """How one object is sampled: its column, mean (an offset from the anchor's sampled
+    position, or absolute without an anchor), std dev and checks."""
 
     name: str
     col: int
     foot: Footprint
     mean: tuple[float, float]
     sigma: tuple[float, float]
-    support: int  # column of the support, -1 for the table
-    checks: tuple[_Check, ...]
+    anchor: int  # column of the anchor, -1 for none
+    checks: tuple[Check, ...]
 
 
-def _pair_check(rel: str, subject: str, reference: str, cols: dict[str, int],
-                foot: dict[str, Footprint], new: str) -> _Check:
-    """A check of ``subject rel reference`` when ``new`` (one of the two) is the candidate."""
-    fs, fr = foot[subject], foot[reference]
-    if new == subject:
-        o = cols[reference]
-
-        def test(cx: Floats, cy: Floats, X: Floats, Y: Floats, rows: NDArray[np.intp]) -> Bools:
-            return pair_relation_holds(rel, cx, cy, fs, X[rows, o, None], Y[rows, o, None], fr,
-                                       SAMPLE_MARGIN_M)
-    else:
-        o = cols[subject]
-
-        def test(cx: Floats, cy: Floats, X: Floats, Y: Floats, rows: NDArray[np.intp]) -> Bools:
-            return pair_relation_holds(rel, X[rows, o, None], Y[rows, o, None], fs, cx, cy, fr,
-                                       SAMPLE_MARGIN_M)
-    return _Check(describe_failure(subject, rel, reference), test)
-
-
-def _clear_check(name: str, other: str, cols: dict[str, int],
-                 foot: dict[str, Footprint]) -> _Check:
-    o, f, fo = cols[other], foot[name], foot[other]
-
-    def test(cx: Floats, cy: Floats, X: Floats, Y: Floats, rows: NDArray[np.intp]) -> Bools:
-        return clear_of(cx, cy, f, X[rows, o, None], Y[rows, o, None], fo, SAMPLE_MARGIN_M)
-    return _Check(f"{name} overlaps {other}", test)
-
-
-def _center_check(name: str, table: Table) -> _Check:
-    def test(cx: Floats, cy: Floats, X: Floats, Y: Floats, rows: NDArray[np.intp]) -> Bools:
-        return in_center(cx, cy, table, SAMPLE_MARGIN_M)
-    return _Check(describe_failure(name, CENTER, None), test)
+def realisable(layout: GuidedLayout, relation: Relation, stated: float, items: Sequence[Item],
+               tol: float = GAP_TOLERANCE_M) -> bool:
+    """Whether the guided layout itself keeps ``relation``'s stated gap within ``tol``
+    (the other relations may have pushed the pair apart)."""
+    if relation.reference is None:
+        return False
+    foot = {it.name: Footprint.of_spec(it.spec) for it in items}
+    xs, ys = layout.positions[relation.subject]
+    xr, yr = layout.positions[relation.reference]
+    got = realised_gap_m(relation.relation, stated, xs, ys, foot[relation.subject], xr, yr,
+                         foot[relation.reference])
+    return bool(abs(float(got) - stated) <= tol)
 
 
 def _plan(items: Sequence[Item], layout: GuidedLayout, relations: Sequence[Relation],
-          table: Table) -> list[_Step]:
+          table: Table, gaps_m: Mapping[Key, float] | None = None,
+          tolerance_m: float | None = None, region: Polygon | None = None) -> list[_Step]:
     names = [it.name for it in items]
     if sorted(layout.order) != sorted(names):
         raise BadInput("sampler: the guided layout does not cover exactly the objects to place")
@@ -142,22 +135,44 @@ def _plan(items: Sequence[Item], layout: GuidedLayout, relations: Sequence[Relat
     edges = rests_on_edges(r.key() for r in relations)
     edges += [(n, s) for n, s in layout.support.items() if s is not None]
     chain = stacked_pairs(edges)
-    checks: dict[str, list[_Check]] = {n: [] for n in names}
+    checks: dict[str, list[Check]] = {n: [] for n in names}
     for r in relations:
         if r.reference is None:
-            checks[r.subject].append(_center_check(r.subject, table))
+            checks[r.subject].append(center_check(r.subject, table))
             continue
         new = max(r.subject, r.reference, key=rank.__getitem__)
-        checks[new].append(_pair_check(r.relation, r.subject, r.reference, cols, foot, new))
+        checks[new].append(pair_check(r.relation, r.subject, r.reference, cols, foot, new))
+        stated = None if gaps_m is None else gaps_m.get(r.key())
+        if tolerance_m is not None and stated is not None and has_gap(r) \
+                and realisable(layout, r, stated, items, tolerance_m):
+            checks[new].append(gap_check(r.relation, r.subject, r.reference, stated,
+                                          tolerance_m, cols, foot, new))
+    edge = layout.edge_gap_m
+    if tolerance_m is not None and edge is not None:
+        f = foot[layout.origin]
+        if abs(float(edge_gap_m(layout.positions[layout.origin][1], f, table)) - edge) \
+                <= tolerance_m:
+            checks[layout.origin].append(edge_check(layout.origin, f, edge, tolerance_m,
+                                                     table))
+    if region is not None:
+        for name in names:
+            checks[name].insert(0, region_check(name, foot[name], region))
     steps = []
     for k, name in enumerate(layout.order):
-        clear = [_clear_check(name, other, cols, foot) for other in layout.order[:k]
+        clear = [clear_check(name, other, cols, foot) for other in layout.order[:k]
                  if frozenset((name, other)) not in chain]
         support = layout.support.get(name)
         if support is not None and rank[support] > k:
             raise BadInput(f"sampler: {name!r} is ordered before its support {support!r}")
-        steps.append(_Step(name, cols[name], foot[name], layout.positions[name], layout.sigma[name],
-                           -1 if support is None else cols[support], tuple(checks[name] + clear)))
+        anchor = layout.anchor.get(name, support)
+        if anchor is not None and rank[anchor] > k:
+            raise BadInput(f"sampler: {name!r} is ordered before its anchor {anchor!r}")
+        mean = layout.positions[name] if anchor is None else layout.offset(name)
+        if anchor is not None and anchor not in layout.anchor:
+            # A layout without anchors (built by hand): draw around the support itself.
+            mean = (0.0, 0.0)
+        steps.append(_Step(name, cols[name], foot[name], mean, layout.sigma[name],
+                           -1 if anchor is None else cols[anchor], tuple(checks[name] + clear)))
     return steps
 
 
@@ -188,7 +203,7 @@ def _first_accepted(step: _Step, mean: tuple[Floats | float, Floats | float],
     Candidates are drawn and checked in chunks (:data:`FIRST_CHUNK` columns, then doubling)
     and a row stops drawing once it has its candidate: rows that accept early cost little.
     """
-    size = f"{table.width:.2f} x {table.depth:.2f} m table"
+    size = table.label
     reasons = [f"{step.name} leaves the {size}", *(c.reason for c in step.checks)]
     rejected = np.zeros((len(reasons), pending.size), dtype=np.int64)
     got = np.zeros(pending.size, dtype=bool)
@@ -238,8 +253,9 @@ def _build(steps: Sequence[_Step], n: int, n_objects: int, table: Table, scale: 
         for w in range(WIDEN_STEPS):
             widen = scale * WIDEN_FACTOR ** w
             sx, sy = min(step.sigma[0] * widen, cap[0]), min(step.sigma[1] * widen, cap[1])
-            if step.support >= 0:
-                mx, my = X[pending, step.support, None], Y[pending, step.support, None]
+            if step.anchor >= 0:
+                mx = X[pending, step.anchor, None] + step.mean[0]
+                my = Y[pending, step.anchor, None] + step.mean[1]
             else:
                 mx, my = step.mean
             got, k = _first_accepted(step, (mx, my), (sx, sy), X, Y, pending, table, rng,
@@ -258,15 +274,15 @@ def _build(steps: Sequence[_Step], n: int, n_objects: int, table: Table, scale: 
 
 def _precheck(items: Sequence[Item], layout: GuidedLayout, table: Table) -> None:
     """Raises :class:`Infeasible` when the objects plainly cannot fit on the table."""
-    size = f"{table.width:.2f} x {table.depth:.2f} m table"
+    size = table.label
     for it in items:
         sx, sy = it.spec.size
-        if sx > table.width or sy > table.depth:
+        if not inside_table(0.0, 0.0, Footprint.of_spec(it.spec), table):
             raise Infeasible(f"no feasible arrangement: the {size} is too small for {it.name} "
                              f"({sx:.2f} x {sy:.2f} m)")
     flat = [it for it in items if layout.support.get(it.name) is None]
     need = sum(it.spec.area for it in flat)
-    has = table.width * table.depth
+    has = table.area
     if need > has:
         names = ", ".join(it.name for it in flat[:4]) + (", ..." if len(flat) > 4 else "")
         raise Infeasible(f"no feasible arrangement: the {size} is too small for {names} "
@@ -276,16 +292,26 @@ def _precheck(items: Sequence[Item], layout: GuidedLayout, table: Table) -> None
 def sample_configurations(items: Sequence[Item], layout: GuidedLayout,
                           relations: Sequence[Relation], table: Table,
                           rng: np.random.Generator, m: int = 25, batch: int = 256,
-                          max_rounds: int = DEFAULT_MAX_ROUNDS) -> tuple[Configuration, ...]:
+                          max_rounds: int = DEFAULT_MAX_ROUNDS,
+                          gaps_m: Mapping[Key, float] | None = None,
+                          tolerance_m: float | None = GAP_TOLERANCE_M,
+                          region: Polygon | None = None) -> tuple[Configuration, ...]:
     """``m`` configurations of ``items`` near ``layout`` that keep every relation.
 
-    Deterministic for a given state of ``rng``. Raises :class:`Infeasible` when fewer
-    than ``m`` are found within ``max_rounds`` rounds.
+    With ``gaps_m`` (the stated gaps, metres, by relation key) and ``tolerance_m``, every
+    configuration also keeps each stated gap that the guided layout realises, and the
+    layout's diner distance, within ``tolerance_m``. Deterministic for a given state of
+    ``rng``. ``region``: a diner's place (:mod:`llm_grop.geometry.places`), in the frame
+    of ``table``, that every footprint must also lie in. Raises :class:`Infeasible` when
+    fewer than ``m`` are found within ``max_rounds`` rounds.
     """
     if m < 1 or batch < 1 or max_rounds < 1:
         raise BadInput(f"sampler: m, batch and max_rounds must be positive, got "
                        f"{m}, {batch}, {max_rounds}")
-    steps = _plan(items, layout, relations, table)
+    if tolerance_m is not None and tolerance_m <= SAMPLE_MARGIN_M:
+        raise BadInput(f"sampler: the gap tolerance must exceed {SAMPLE_MARGIN_M:g} m, "
+                       f"got {tolerance_m:g}")
+    steps = _plan(items, layout, relations, table, gaps_m, tolerance_m, region)
     _precheck(items, layout, table)
     stats = _Stats()
     found: list[tuple[Floats, Floats]] = []
@@ -313,11 +339,13 @@ def _configuration(items: Sequence[Item], layout: GuidedLayout, x: Floats,
                    y: Floats) -> Configuration:
     return Configuration(tuple(
         Placement(name=it.name, x=px, y=py, yaw=0.0, shape=it.spec.shape, size=it.spec.size,
-                  on=layout.support.get(it.name), kind=it.kind, height=it.spec.height)
+                  on=layout.support.get(it.name), kind=it.kind, height=it.spec.height,
+                  diner=it.diner)
         for it, px, py in zip(items, x.tolist(), y.tolist(), strict=True)))
 
 
-def violations(config: Configuration, relations: Sequence[Relation], table: Table) -> list[str]:
+def violations(config: Configuration, relations: Sequence[Relation], table: Table,
+               region: Polygon | None = None) -> list[str]:
     """Why ``config`` is not a valid arrangement for ``relations`` on ``table``, in words.
 
     Empty when every object lies on the table, no two footprints overlap (stacking
@@ -326,10 +354,13 @@ def violations(config: Configuration, relations: Sequence[Relation], table: Tabl
     out: list[str] = []
     places = config.by_name()
     foot = {n: Footprint.of_placement(p) for n, p in places.items()}
-    size = f"{table.width:.2f} x {table.depth:.2f} m table"
+    size = table.label
     for n, p in places.items():
         if not inside_table(p.x, p.y, foot[n], table):
             out.append(f"{n} leaves the {size}")
+        elif region is not None and not inside_region(p.x, p.y, foot[n].hx, foot[n].hy,
+                                                      foot[n].shape == "circle", region):
+            out.append(f"{n} leaves its diner's place")
     edges = rests_on_edges(r.key() for r in relations)
     edges += [(n, p.on) for n, p in places.items() if p.on is not None]
     chain = stacked_pairs(edges)

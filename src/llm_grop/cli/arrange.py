@@ -17,7 +17,8 @@ from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
 @click.option("--task", type=click.IntRange(1),
               help="Use the objects of the paper's Table I task N.")
 @click.option("--table", "table_size", default="0.9x0.6", show_default=True,
-              help="Table top WxD in metres.")
+              metavar="WxD|round:D",
+              help="Table top: WxD in metres, or round:D for a round top of diameter D.")
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
               help="Seed for every LLM call and the sampler.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),

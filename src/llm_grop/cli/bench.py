@@ -12,7 +12,9 @@ from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
     FEASIBILITY,
+    FIDELITY_WEIGHT,
     SIMULATOR,
+    TABLE,
     llm_flags_without_record,
     llm_settings,
 )
@@ -106,10 +108,12 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 @click.option("--chairs", type=click.IntRange(0),
               help="Chairs sampled near the table in every trial [default: the scene's own, "
                    "else 1].")
+@TABLE
 @SIMULATOR
 @FEASIBILITY
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
+@FIDELITY_WEIGHT
 @click.option("--task-file", "task_files", multiple=True,
               type=click.Path(dir_okay=False, path_type=Path),
               help="Extra tasks (YAML, like the packaged tasks.yaml); repeatable.")
@@ -117,8 +121,8 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 @llm_flags_without_record
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
-          seed: int, scene_path: Path | None, chairs: int | None, simulator: str, feasibility: str,
-          w: float,
+          seed: int, scene_path: Path | None, chairs: int | None, table_text: str | None,
+          simulator: str, feasibility: str, w: float, fidelity_w: float,
           task_files: tuple[Path, ...], no_images: bool,
           catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
     """Run the paper's experiment: tasks x trials x methods, rated 1-5 (paper §IV)."""
@@ -140,7 +144,8 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.world.contract import TrialRow
-    from llm_grop.world.scene_file import load_scene
+    from llm_grop.world.scene_file import load_scene, set_target_top
+    from llm_grop.world.table import Table
     from llm_grop.world.tasks import load_tasks
 
     known = load_tasks(task_files)
@@ -160,10 +165,15 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     else:
         BACKENDS.get(backend)
     scene = load_scene(scene_path)  # a bad scene is reported before any trial runs
+    if table_text is not None:
+        top = Table.parse(table_text)
+        scene = set_target_top(scene, top, keep_chairs=chairs is None)
+        table_text = top.text  # one spelling per table in the experiment's identity
     _check_tasks(tasks, known, options, catalog_files, sim, scene)
     settings = TrialSettings(
         backend=backend, llm_options=llm_options, arrange=options,
-        scene=str(scene_path) if scene_path else None, chairs=chairs, w=w,
+        scene=str(scene_path) if scene_path else None, chairs=chairs, table=table_text, w=w,
+        fidelity_w_s_per_cm=fidelity_w,
         task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
         images=None if no_images else str(out_dir / "images"), simulator=simulator,
         feasibility=feasibility)

@@ -13,7 +13,9 @@ def print_arrangement(result: ArrangementResult, console: Console) -> None:
     """Relations, conflicts found and resolved, warnings and positions of ``result``."""
     a = result.arrangement
     console.print(f"[bold]Request:[/bold] {a.request}")
-    console.print(f"[bold]Table:[/bold] {a.table.width:g} x {a.table.depth:g} m")
+    size = (f"round, {a.table.width:g} m across" if a.table.is_round
+            else f"{a.table.width:g} x {a.table.depth:g} m")
+    console.print(f"[bold]Table:[/bold] {size}")
     for k, attempt in enumerate(result.attempts, 1):
         if attempt.conflict:
             lines = "; ".join(r.line or r.sentence() for r in attempt.conflict)

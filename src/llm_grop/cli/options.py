@@ -77,6 +77,20 @@ FEASIBILITY = click.option(
     help="The planner's feasibility profile: default (assumed) or mujoco (fitted in 3D).")
 
 
+FIDELITY_WEIGHT = click.option(
+    "--fidelity-weight", "fidelity_w", default=1.0, show_default=True,
+    type=click.FloatRange(0),
+    help="Seconds of GROP's utility that one centimetre of infidelity costs (stated gaps "
+         "missed, the setting's shift); 0 ignores fidelity.")
+
+
+#: ``--table`` of the commands that run in the dining room: the target table's top.
+TABLE = click.option(
+    "--table", "table_text", metavar="WxD|round:D",
+    help="Replace the target table's top: WxD in metres (0.9x0.6) or round:D, a round "
+         "top of diameter D (round:1.2) [default: the scene's].")
+
+
 SIMULATOR = click.option(
     "--simulator", default=DEFAULT_SIMULATOR, show_default=True,
     help="The simulator that executes the plan (see `llm-grop plugins`).")

@@ -11,7 +11,9 @@ from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
     FEASIBILITY,
+    FIDELITY_WEIGHT,
     SIMULATOR,
+    TABLE,
     check_outputs,
     check_request,
     llm_flags,
@@ -33,10 +35,12 @@ from llm_grop.errors import BadInput
               help="Seed for the scene's chairs, the LLM, the sampler, the plan and execution.")
 @click.option("--chairs", type=click.IntRange(0),
               help="Chairs to sample near the table [default: the scene's own, else 1].")
+@TABLE
 @SIMULATOR
 @FEASIBILITY
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
+@FIDELITY_WEIGHT
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write the run JSON here.")
 @click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -50,7 +54,8 @@ from llm_grop.errors import BadInput
 @llm_flags
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
-        chairs: int | None, simulator: str, feasibility: str, w: float,
+        chairs: int | None, table_text: str | None, simulator: str, feasibility: str,
+        w: float, fidelity_w: float,
         json_path: Path | None,
         image_path: Path | None, table_image: Path | None, room_image: Path | None,
         video_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
@@ -63,8 +68,10 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
     from llm_grop.planning.utility import GropOptions
     from llm_grop.world.jsonio import write_json
     from llm_grop.world.run_json import run_to_dict
+    from llm_grop.world.table import Table
 
     check_request("run", request, task)
+    table = Table.parse(table_text) if table_text is not None else None
     llm_options, options = llm_settings(**flags)
     check_outputs(json=json_path, image=image_path, table_image=table_image,
                   room_image=room_image, video=video_path)
@@ -76,9 +83,10 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
                 status.update(message)
 
         result = api_run(request, task=task, method=method, scene=scene_path, chairs=chairs,
-                         seed=seed, llm=flags["backend"], llm_options=llm_options,
+                         table=table, seed=seed, llm=flags["backend"], llm_options=llm_options,
                          catalog_files=catalog_files, options=options, record=record_path,
-                         planner=GropOptions(w=w), simulator=sim, feasibility=feasibility,
+                         planner=GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w),
+                         simulator=sim, feasibility=feasibility,
                          on_event=on_event)
     if json_path is not None:
         write_json(json_path, run_to_dict(result))

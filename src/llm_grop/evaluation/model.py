@@ -90,10 +90,13 @@ class Obj:
 class Setting:
     """The arrangement as the rules see it.
 
-    ``width`` x ``depth`` is the table top (metres); ``support`` maps every object
+    ``width`` x ``depth`` is the table top (metres), or, for one of several diners, their
+    place at it; the diner sits at its -y edge. ``support`` maps every object
     to what it rests on (``None``: the table), from ``on`` or, when ``on`` is
     absent, inferred for an allowed pair from a centre inside the other's
     footprint. ``requested`` holds the requested kinds (``None``: not known).
+    ``outline`` is the whole table top in the setting's frame when it is not the
+    ``width`` x ``depth`` rectangle (a round top, or a diner's place at a bigger table).
     """
 
     width: float
@@ -103,6 +106,7 @@ class Setting:
     inferred: frozenset[str]
     requested: tuple[str, ...] | None
     conv: Conventions
+    outline: Polygon | None = field(default=None, compare=False)
 
     def by_name(self, name: str) -> Obj:
         """The object called ``name``."""
@@ -184,12 +188,14 @@ def _rests_on(name: str, other: str, support: Mapping[str, str | None]) -> bool:
 
 
 def read_setting(doc: ArrangementDoc, requested: tuple[str, ...] | None, catalog: Catalog,
-                 conv: Conventions, where: str = "arrangement") -> Setting:
-    """A :class:`Setting` from the arrangement document ``doc``."""
-    if doc.table.shape != "rectangle":
-        raise BadInput(f"{where}: table.shape: only 'rectangle' is supported, got "
-                       f"{doc.table.shape!r}")
+                 conv: Conventions, where: str = "arrangement",
+                 outline: Polygon | None = None) -> Setting:
+    """A :class:`Setting` from the arrangement document ``doc`` (a round top's outline is
+    a circle; ``outline`` overrides it, e.g. with the whole table seen from a diner's
+    place)."""
     width, depth = doc.table.size
+    if outline is None and doc.table.shape == "circle":
+        outline = Point(0.0, 0.0).buffer(width / 2, quad_segs=32)
     objects = tuple(_read_object(i, o, where, catalog) for i, o in enumerate(doc.objects))
     names = [o.name for o in objects]
     for i, o in enumerate(objects):
@@ -218,4 +224,5 @@ def read_setting(doc: ArrangementDoc, requested: tuple[str, ...] | None, catalog
                                f"in a cycle ({' -> '.join([*seen, below])})")
             seen.append(below)
             below = support[below]
-    return Setting(width, depth, objects, support, frozenset(inferred), requested, conv)
+    return Setting(width, depth, objects, support, frozenset(inferred), requested, conv,
+                   outline)

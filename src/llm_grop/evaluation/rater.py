@@ -25,13 +25,14 @@ objects are, not what a planner meant. Lengths are metres, angles radians.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from llm_grop.errors import BadInput
 from llm_grop.evaluation.context import make_context
 from llm_grop.evaluation.conventions import Conventions, load_conventions
-from llm_grop.evaluation.model import Check, kind_of, read_setting
+from llm_grop.evaluation.diners import diner_docs, per_diner_kinds, several_diners
+from llm_grop.evaluation.model import Check, Setting, kind_of, read_setting
 from llm_grop.evaluation.rules import RULES
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.contract import ArrangementDoc, CheckDoc, RatingDoc
@@ -53,11 +54,13 @@ SCORE_MEANING = {
 
 @dataclass(frozen=True)
 class Rating:
-    """A score from 1 to 5, every check behind it, and a one-line summary."""
+    """A score from 1 to 5, every check behind it, and a one-line summary. A table set for
+    several diners also has each diner's rating (``diners``); its score is the lowest."""
 
     score: int
     checks: tuple[Check, ...]
     summary: str
+    diners: tuple[Rating, ...] = ()
 
     @property
     def failed(self) -> tuple[Check, ...]:
@@ -66,8 +69,9 @@ class Rating:
 
     def doc(self) -> RatingDoc:
         """The rating as the contract's document (a trial row's ``rating_explanation``)."""
+        extra = {"diners": [d.doc() for d in self.diners]} if self.diners else {}
         return RatingDoc(score=self.score, summary=self.summary,
-                         checks=[CheckDoc(**asdict(c)) for c in self.checks])
+                         checks=[CheckDoc(**asdict(c)) for c in self.checks], **extra)
 
     def to_dict(self) -> dict[str, Any]:
         """``{"score", "summary", "checks": [...]}``, ready for JSON."""
@@ -139,14 +143,41 @@ def rate(arrangement: Mapping[str, Any] | ArrangementDoc, requested: Sequence[st
     else:
         raise BadInput(f"{where}: expected a JSON object with 'table' and 'objects'")
     kinds: tuple[str, ...] | None
+    assigned: list[tuple[str, int | None]] | None = None
     if requested is not None:
         kinds = requested_kinds(requested, catalog)
+    elif doc.request.strip():
+        parsed = parse_request(doc.request, catalog).items
+        kinds = tuple(i.kind for i in parsed)
+        assigned = [(i.kind, i.diner) for i in parsed]
     else:
-        text = doc.request
-        kinds = tuple(i.kind for i in parse_request(text, catalog).items) \
-            if text.strip() else None
+        kinds = None
+    if several_diners(doc):
+        return _rate_diners(doc, kinds, assigned, catalog, conv, where)
     setting = read_setting(doc, kinds, catalog, conv, where)
+    return _rate(setting)
+
+
+def _rate(setting: Setting) -> Rating:
     ctx = make_context(setting)
     checks = tuple(c for rule in RULES for c in rule(setting, ctx))
     score = score_of(checks)
     return Rating(score, checks, _summary(score, checks))
+
+
+def _rate_diners(doc: ArrangementDoc, kinds: tuple[str, ...] | None,
+                 assigned: list[tuple[str, int | None]] | None, catalog: Catalog,
+                 conv: Conventions, where: str) -> Rating:
+    """Each diner's setting rated in their frame; the table scores the lowest of them."""
+    docs = diner_docs(doc, where)
+    wanted = per_diner_kinds(kinds, len(docs), assigned)
+    ratings = [_rate(read_setting(sub, want, catalog, conv, f"{where}: diner {k}", top))
+               for k, ((sub, top), want) in enumerate(zip(docs, wanted, strict=True))]
+    score = min(r.score for r in ratings)
+    worst = min(range(len(ratings)), key=lambda k: ratings[k].score)
+    checks = tuple(replace(c, detail=f"diner {k}: {c.detail}")
+                   for k, r in enumerate(ratings) for c in r.checks)
+    each = ", ".join(str(r.score) for r in ratings)
+    summary = (f"{score}/5: lowest of {len(ratings)} settings (diner {worst}); per diner "
+               f"{each}; diner {worst}: {ratings[worst].summary}")
+    return Rating(score, checks, summary, tuple(ratings))

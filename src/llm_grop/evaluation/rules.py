@@ -14,7 +14,9 @@ import math
 from collections import Counter
 from collections.abc import Callable
 
+import shapely
 from shapely.geometry import Point
+from shapely.geometry.base import BaseGeometry
 
 from llm_grop.evaluation.context import (
     Context,
@@ -60,6 +62,8 @@ def items_present(s: Setting, ctx: Context) -> list[Check]:
 
 def on_table(s: Setting, ctx: Context) -> list[Check]:
     """Every object stands on the table top; a big overhang counts as off the table."""
+    if s.outline is not None:
+        return _on_outline(s)
     t = s.conv.thresholds
     w2, d2 = s.width / 2, s.depth / 2
     off: list[Issue] = []
@@ -83,6 +87,36 @@ def on_table(s: Setting, ctx: Context) -> list[Check]:
                       f"all {len(s.objects)} objects on the {s.width:.2f} x {s.depth:.2f} m top"),
             *outcome("edge overhang", "minor", over_edge,
                       f"nothing hangs more than {cm(t.overhang_tolerance_m)} over an edge")]
+
+
+def _on_outline(s: Setting) -> list[Check]:
+    """:func:`on_table` for a top that is not the setting's rectangle (a round top, a diner's
+    place at a bigger table): the overhang is the share of the footprint's area outside
+    the top, and how far its farthest point lies beyond the edge."""
+    t = s.conv.thresholds
+    top = s.outline
+    assert top is not None
+    off: list[Issue] = []
+    over_edge: list[Issue] = []
+    for o in s.objects:
+        outside = o.footprint.difference(top)
+        share = outside.area / o.footprint.area if o.footprint.area > 0 else 0.0
+        worst = max((top.exterior.distance(Point(c)) for c in _points(outside)), default=0.0)
+        if not top.contains(Point(o.x, o.y)):
+            off.append(("missing", f"{o.name}: centre {pos(o)} is off the table top"))
+        elif share > t.off_table_overhang_fraction:
+            off.append(("missing", f"{o.name} hangs {share:.0%} of its area over the edge; "
+                        f"at most {t.off_table_overhang_fraction:.0%}"))
+        elif worst > t.overhang_tolerance_m:
+            over_edge.append(("minor", f"{o.name} hangs {cm(worst)} over the edge"))
+    return [*outcome("on table", "missing", off, f"all {len(s.objects)} objects on the top"),
+            *outcome("edge overhang", "minor", over_edge,
+                     f"nothing hangs more than {cm(t.overhang_tolerance_m)} over an edge")]
+
+
+def _points(g: BaseGeometry) -> list[tuple[float, float]]:
+    """Every vertex of ``g`` (any polygonal geometry)."""
+    return [(float(x), float(y)) for x, y in shapely.get_coordinates(g)]
 
 
 def overlap(s: Setting, ctx: Context) -> list[Check]:

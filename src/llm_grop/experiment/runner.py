@@ -100,7 +100,10 @@ def identity(exp: Experiment) -> dict[str, Any]:
         "arrange": json.loads(json.dumps(asdict(s.arrange), default=str)),
         "scene": _digest([s.scene]) if s.scene else "packaged",
         "chairs": s.chairs,
+        # Absent for the scene's own table, so directories written before --table resume.
+        **({"table": s.table} if s.table is not None else {}),
         "w": s.w,
+        "fidelity_weight_s_per_cm": s.fidelity_w_s_per_cm,
         "simulator": s.simulator,
         # Absent for the default, so directories written before profiles existed resume.
         **({"feasibility": s.feasibility} if s.feasibility != "default" else {}),

@@ -32,8 +32,9 @@ from llm_grop.world.contract import TrialRow
 from llm_grop.world.request import items_from_names
 from llm_grop.world.run_json import run_doc
 from llm_grop.world.scene import Scene
-from llm_grop.world.scene_file import load_scene
+from llm_grop.world.scene_file import load_scene, set_target_top
 from llm_grop.world.serialize import arrangement_doc
+from llm_grop.world.table import Table
 from llm_grop.world.tasks import Task, load_tasks
 
 log = logging.getLogger(__name__)
@@ -62,9 +63,11 @@ class TrialSettings:
     """What every trial of an experiment shares (picklable, for worker processes).
 
     ``scene``: a scene YAML path or ``None`` for the packaged room; ``chairs``: chairs per
-    episode; ``w``: GROP's utility weight, seconds; ``simulator``: the simulator that
-    executes every plan; ``feasibility``: the planner's feasibility profile; ``images``:
-    where to draw each trial's final table (``None``: no pictures).
+    episode; ``table``: the target table's top as ``--table`` takes it (``"1.8x0.9"``,
+    ``"round:1.2"``; ``None``: the scene's); ``w``: GROP's utility weight, seconds;
+    ``simulator``: the simulator that executes every plan; ``feasibility``: the planner's
+    feasibility profile; ``images``: where to draw each trial's final table (``None``: no
+    pictures).
     """
 
     backend: str = "replay"
@@ -78,6 +81,8 @@ class TrialSettings:
     images: str | None = None
     simulator: str = DEFAULT_SIMULATOR
     feasibility: str = "default"
+    table: str | None = None
+    fidelity_w_s_per_cm: float = 1.0
 
 
 class TrialRunner:
@@ -88,6 +93,9 @@ class TrialRunner:
         self.catalog = Catalog.load(settings.catalog_files)
         self.tasks: dict[int, Task] = load_tasks(settings.task_files)
         self.scene: Scene = load_scene(settings.scene)
+        if settings.table is not None:
+            self.scene = set_target_top(self.scene, Table.parse(settings.table),
+                                        keep_chairs=settings.chairs is None)
         self.simulator = create_simulator(settings.simulator)
         self._backend: LLM | None = None
 
@@ -107,7 +115,9 @@ class TrialRunner:
             result = run(task=spec.task, tasks=self.tasks, method=spec.method, scene=self.scene,
                          chairs=self.settings.chairs, seed=spec.seed,
                          llm=llm_log if llm_log is not None else "replay", catalog=self.catalog,
-                         options=self.settings.arrange, planner=GropOptions(w=self.settings.w),
+                         options=self.settings.arrange, planner=GropOptions(
+                             w=self.settings.w,
+                             fidelity_w_s_per_cm=self.settings.fidelity_w_s_per_cm),
                          simulator=self.simulator, feasibility=self.settings.feasibility)
         except Infeasible as exc:
             log.info("task %d trial %d %s: infeasible: %s", spec.task, spec.trial,

@@ -13,27 +13,33 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.scene import Scene
 
 Floats = NDArray[np.float64]
 
 
 class Obstacles:
-    """The obstacles of ``scene`` (all rectangles), for exact clearance queries.
+    """The obstacles of ``scene`` (rectangles, and discs for round tables), for exact
+    clearance queries.
 
-    Distances are computed in closed form per rectangle, not with a geometry library,
+    Distances are computed in closed form per shape, not with a geometry library,
     because the sampling planner asks for one point at a time, tens of thousands of times.
     """
 
     def __init__(self, scene: Scene, include_chairs: bool = True) -> None:
-        boxes = scene.static_obstacles()
+        shapes = scene.static_obstacles()
         if include_chairs:
-            boxes = boxes + tuple(c.box for c in scene.chairs)
+            shapes = shapes + tuple(c.box for c in scene.chairs)
+        boxes = [b for b in shapes if isinstance(b, Box)]
         self.width, self.depth = scene.width, scene.depth
         # (x, y, cos, sin, half width, half depth) per rectangle.
         self._boxes = tuple((b.x, b.y, math.cos(b.yaw), math.sin(b.yaw), b.width / 2,
                              b.depth / 2) for b in boxes)
         self._arr = np.array(self._boxes, dtype=float).reshape(-1, 6)
+        # (x, y, radius) per disc.
+        self._discs = tuple((d.x, d.y, d.radius) for d in shapes if isinstance(d, Disc))
+        self._disc_arr = np.array(self._discs, dtype=float).reshape(-1, 3)
 
     def clearance(self, xy: Floats) -> Floats:
         """Distance, metres, from each room-frame point of ``xy`` (shape ``(N, 2)``) to the
@@ -49,6 +55,9 @@ class Obstacles:
             inside = (u <= 0) & (v <= 0)
             dist = np.where(inside, 0.0, np.hypot(np.maximum(u, 0), np.maximum(v, 0)))
             d = np.minimum(d, dist.min(axis=0))
+        if len(self._disc_arr):
+            cx, cy, r = (col[:, None] for col in self._disc_arr.T)
+            d = np.minimum(d, (np.hypot(x[None, :] - cx, y[None, :] - cy) - r).min(axis=0))
         return np.maximum(d, 0.0)
 
     def segment_free(self, a: tuple[float, float], b: tuple[float, float], radius_m: float,
@@ -74,4 +83,4 @@ class Obstacles:
                 continue
             if u <= 0 or v <= 0 or u * u + v * v < r2:
                 return False
-        return True
+        return all(math.hypot(x - cx, y - cy) >= r + radius_m for cx, cy, r in self._discs)

@@ -27,6 +27,7 @@ from llm_grop.errors import BadInput
 from llm_grop.llm.base import CallLog
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
+from llm_grop.world.fidelity import Fidelity
 from llm_grop.world.table import Table
 
 
@@ -48,11 +49,14 @@ class EpisodeInput:
 @dataclass(frozen=True)
 class Proposal:
     """A method's arrangement: the one shown (first configuration), the M configurations
-    to plan for, and the seconds spent computing them with LLM calls excluded."""
+    to plan for, the seconds spent computing them with LLM calls excluded, and how
+    faithfully each configuration keeps the stated geometry (empty: nothing was stated,
+    as for a random arrangement)."""
 
     arrangement: Arrangement
     configurations: tuple[Configuration, ...]
     compute_time_s: float
+    fidelity: tuple[Fidelity, ...] = ()
 
 
 class Method(Protocol):
@@ -94,7 +98,7 @@ class ComposedMethod:
                                    inp.seed, inp.options, inp.on_event)
             llm_s = inp.llm.wall_s - before
             return Proposal(result.arrangement, result.configurations,
-                            max(time.perf_counter() - t0 - llm_s, 0.0))
+                            max(time.perf_counter() - t0 - llm_s, 0.0), result.fidelity)
         rng = seeds.stream(inp.seed, "random_arrangement")
         configs = random_configurations(inp.items, inp.table, rng, m=inp.options.m)
         arrangement = Arrangement(inp.request, inp.table, configs[0].placements)

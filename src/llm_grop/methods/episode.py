@@ -11,7 +11,7 @@ import time
 from dataclasses import replace
 
 from llm_grop import seeds
-from llm_grop.arrangement.sampling import violations
+from llm_grop.arrangement.diners import violations_at_table
 from llm_grop.methods.base import EpisodeInput, Method
 from llm_grop.planning.feasibility import FeasibilityModel, feasibility_profile
 from llm_grop.planning.grop import build_plan, choose
@@ -50,7 +50,7 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     belief = feasibility_profile(model) if isinstance(model, str) else model
     ctx = PlanningContext(scene, inp.items, belief, planner)
     cand = choose(ctx, proposal.configurations, method.standing,
-                  seeds.stream(inp.seed, "standing"), method.best_of_all)
+                  seeds.stream(inp.seed, "standing"), method.best_of_all, proposal.fidelity)
     navigator = Navigator(scene, scene.robot.base_radius_m,
                           time_limit_s=ctx.options.path_time_limit_s)
     plan = build_plan(ctx, cand, navigator, inp.seed, len(proposal.configurations))
@@ -84,4 +84,4 @@ def _breaks(config: Configuration, relation: Relation, planned: Arrangement) -> 
     left the table)."""
     pair = {relation.subject, relation.reference}
     sub = Configuration(tuple(p for p in config.placements if p.name in pair))
-    return bool(violations(sub, [relation], planned.table))
+    return bool(violations_at_table(sub, [relation], planned.table))

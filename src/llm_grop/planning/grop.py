@@ -2,17 +2,23 @@
 
 For each configuration, each object gets the standing position that maximises
 ``w * feasibility - cost`` given the object that follows it, the order is the one of
-least total cost with supports first, and the configuration whose plan has the highest
-utility is the one executed. Navigation legs of the chosen plan are then planned with
-OMPL around the sensed chairs. The baselines' *uniform* standing policy (TPRA, LATP)
-shares all of this except the standing choice.
+least total cost with supports first, and the configuration whose plan scores highest
+is the one executed. A plan's score is its utility minus a fidelity penalty:
+``fidelity_w_s_per_cm`` seconds per centimetre by which the configuration strays from
+the stated geometry (:attr:`~llm_grop.world.fidelity.Fidelity.infidelity_m`: its gap
+errors plus its origin's shift). Every configuration the sampler gives already keeps the
+stated gaps within tolerance, so GROP trades feasibility against cost among faithful
+configurations, and the weight says how much a centimetre nearer to what was said is
+worth in seconds (0: fidelity plays no part, as in the paper). Navigation legs of the
+chosen plan are then planned with OMPL around the sensed chairs. The baselines' *uniform*
+standing policy (TPRA, LATP) shares all of this except the standing choice.
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -25,6 +31,7 @@ from llm_grop.planning.sequencing import best_order, supports_before
 from llm_grop.planning.trips import plan_trips
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement
+from llm_grop.world.fidelity import Considered, Fidelity
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import Plan, Step
 
@@ -58,6 +65,9 @@ class Candidate:
     cost_s: float
     place_p: tuple[float, ...]
     order_optimal: bool = True
+    fidelity: Fidelity = Fidelity()
+    score: float = 0.0
+    considered: tuple[Considered, ...] = ()
 
 
 def _in_item_order(ctx: PlanningContext, config: Configuration) -> tuple[Placement, ...]:
@@ -143,31 +153,53 @@ def _spread(ctx: PlanningContext, ranked: Sequence[int], chosen: int, k: int,
 
 def choose(ctx: PlanningContext, configs: Sequence[Configuration],
            policy: StandingPolicy = "utility", rng: np.random.Generator | None = None,
-           best_of_all: bool = True) -> Candidate:
-    """The configuration whose plan has the highest utility (``best_of_all``), or the first
-    one that has a plan; raises :class:`Infeasible` with the reason when none has."""
+           best_of_all: bool = True, fidelity: Sequence[Fidelity] = ()) -> Candidate:
+    """The configuration whose plan scores highest (``best_of_all``), or the first one that
+    has a plan; raises :class:`Infeasible` with the reason when none has.
+
+    ``fidelity`` holds one measure per configuration (none: every one counts as faithful);
+    the score is the utility minus ``ctx.options.fidelity_w_s_per_cm`` seconds per
+    centimetre of infidelity. The returned candidate lists every configuration evaluated.
+    """
+    if fidelity and len(fidelity) != len(configs):
+        raise ValueError(f"{len(fidelity)} fidelity measures for {len(configs)} configurations")
+    per_m = 100.0 * ctx.options.fidelity_w_s_per_cm
+    fid = list(fidelity) or [Fidelity()] * len(configs)
     large = len(ctx.items) > EXACT_LIMIT
     reasons: list[str] = []
     found: list[Candidate] = []
+    considered: list[Considered] = []
     for i, config in enumerate(configs):
         cand = evaluate(ctx, config, i, policy, rng, node_budget=0 if large else NODE_BUDGET)
         if isinstance(cand, str):
             log.debug("configuration %d: no plan: %s", i + 1, cand)
             reasons.append(cand)
+            considered.append(Considered(i, None, None, None, fid[i], None))
             continue
-        log.debug("configuration %d: utility %.1f s, feasibility %.2f", i + 1, cand.utility,
-                  cand.feasibility)
+        cand = replace(cand, fidelity=fid[i],
+                       score=cand.utility - per_m * fid[i].infidelity_m)
+        log.debug("configuration %d: utility %.1f s, feasibility %.2f, infidelity %.1f cm",
+                  i + 1, cand.utility, cand.feasibility, 100 * fid[i].infidelity_m)
         found.append(cand)
+        considered.append(Considered(i, cand.utility, cand.feasibility, cand.cost_s, fid[i],
+                                     cand.score))
         if not best_of_all:
             break
     if not found:
         raise Infeasible(f"no plan for any of {len(configs)} configuration(s): "
                          f"{max(set(reasons), key=reasons.count)}")
     if large and policy == "utility":
-        top = sorted(found, key=lambda c: -c.utility)[:REFINE]
+        top = sorted(found, key=lambda c: -c.score)[:REFINE]
         refined = [evaluate(ctx, configs[c.index], c.index, policy) for c in top]
-        found = [c for c in refined if not isinstance(c, str)] + found
-    return max(found, key=lambda c: (c.utility, -c.index))
+        better = [replace(c, fidelity=fid[c.index],
+                          score=c.utility - per_m * fid[c.index].infidelity_m)
+                  for c in refined if not isinstance(c, str)]
+        for c in better:
+            considered[c.index] = Considered(c.index, c.utility, c.feasibility, c.cost_s,
+                                             c.fidelity, c.score)
+        found = better + found
+    best = max(found, key=lambda c: (c.score, c.utility, -c.index))
+    return replace(best, considered=tuple(considered))
 
 
 def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed: int,
@@ -193,7 +225,9 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
     return Plan(order=names, steps=steps, configuration=cand.placements,
                 configuration_index=cand.index, utility=cand.utility + saved_s,
                 feasibility=cand.feasibility, cost_s=cand.cost_s - saved_s,
-                configurations_considered=configurations)
+                configurations_considered=configurations, fidelity=cand.fidelity,
+                considered=cand.considered,
+                fidelity_w_s_per_cm=ctx.options.fidelity_w_s_per_cm)
 
 
 def _duration(steps: Sequence[Step]) -> float:

@@ -1,9 +1,10 @@
 """Standing positions (``loc`` in the paper): where the base may stand next to a table.
 
 Candidates lie on loops around the table's top at several stand-off distances (its
-outline grown by the stand-off plus the base's radius, so corners are rounded), spaced
-evenly all the way round, each facing the nearest point of the table. A candidate is
-kept only where the base's footprint touches nothing: walls, tables and sensed chairs.
+outline grown by the stand-off plus the base's radius, so corners are rounded; circles
+round a round table), spaced evenly all the way round, each facing the nearest point of
+the table (a round table's centre). A candidate is kept only where the base's footprint
+touches nothing: walls, tables and sensed chairs.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import shapely
-from shapely.geometry import Polygon
+from shapely.geometry import Point, Polygon
 
 from llm_grop.errors import Infeasible
 from llm_grop.geometry.obstacles import Floats, Obstacles
@@ -26,8 +27,12 @@ from llm_grop.world.scene import ObjectSource, Scene
 def _loop_points(scene: Scene, table_name: str, robot: Robot, spacing_m: float,
                  standoffs_m: Sequence[float]) -> tuple[Floats, Floats]:
     """Points on the loops round the table, ``(N, 2)``, and their headings, ``(N,)`` radians."""
-    box = scene.table(table_name).box
-    top = Polygon(box.corners())
+    table = scene.table(table_name)
+    box = table.box
+    # A round top's loops are circles (its buffer), and its nearest point lies towards
+    # the centre, so every candidate faces the centre.
+    top = Point(box.x, box.y).buffer(box.width / 2, quad_segs=64) if table.is_round \
+        else Polygon(box.corners())
     pts: list[Floats] = []
     for standoff in standoffs_m:
         ring = top.buffer(standoff + robot.base_radius_m, quad_segs=8).exterior
@@ -35,6 +40,8 @@ def _loop_points(scene: Scene, table_name: str, robot: Robot, spacing_m: float,
         along = np.arange(n) * ring.length / n
         pts.append(shapely.get_coordinates(shapely.line_interpolate_point(ring, along)))
     xy = np.concatenate(pts)
+    if table.is_round:
+        return xy, np.arctan2(box.y - xy[:, 1], box.x - xy[:, 0])
     c, s = np.cos(box.yaw), np.sin(box.yaw)
     dx, dy = xy[:, 0] - box.x, xy[:, 1] - box.y
     u = np.clip(c * dx + s * dy, -box.width / 2, box.width / 2)

@@ -53,6 +53,9 @@ class GropOptions:
         grid_resolution_m: cell size of the cost-to-go fields, metres.
         alternatives: fallback standing positions kept per object.
         path_time_limit_s: OMPL's time limit for one navigation path, seconds.
+        fidelity_w_s_per_cm: seconds of utility that one centimetre of infidelity costs
+            (a configuration's summed gap errors plus its origin's shift; see
+            :attr:`~llm_grop.world.fidelity.Fidelity.infidelity_m`). 0 ignores fidelity.
     """
 
     w: float = 40.0
@@ -61,10 +64,14 @@ class GropOptions:
     grid_resolution_m: float = 0.05
     alternatives: int = 3
     path_time_limit_s: float = 0.5
+    fidelity_w_s_per_cm: float = 1.0
 
     def __post_init__(self) -> None:
         if self.w < 0:
             raise BadInput(f"planner: w must not be negative, got {self.w}")
+        if not self.fidelity_w_s_per_cm >= 0 or self.fidelity_w_s_per_cm == float("inf"):
+            raise BadInput(f"--fidelity-weight: must be a finite number >= 0 (seconds per "
+                           f"centimetre), got {self.fidelity_w_s_per_cm:g}")
         if self.spacing_m <= 0 or not self.standoffs_m or min(self.standoffs_m) < 0:
             raise BadInput("planner: spacing_m must be positive and standoffs_m non-negative")
 

@@ -39,7 +39,7 @@ from llm_grop.render.table import (
 from llm_grop.world.arrangement import Placement
 from llm_grop.world.geometry2d import Box, Pose2D
 from llm_grop.world.plan import ExecutedStep, RunResult
-from llm_grop.world.scene import Scene
+from llm_grop.world.scene import Scene, SceneTable
 
 #: Picture size in inches (1950 x 1200 pixels at the table picture's DPI).
 FIGSIZE_IN = (13.0, 8.0)
@@ -137,6 +137,14 @@ def _polygon(box: Box, **style: object) -> Polygon:
     return Polygon(box.corners(), closed=True, **style)  # type: ignore[arg-type]
 
 
+def _table_patch(table: SceneTable, **style: object) -> Patch:
+    """A patch of ``table``'s top (room frame): a circle for a round one."""
+    if table.is_round:
+        return Circle((table.box.x, table.box.y), table.box.width / 2,
+                      **style)  # type: ignore[arg-type]
+    return _polygon(table.box, **style)
+
+
 def _draw_room(ax: Axes, scene: Scene, handles: list[Patch | Line2D]) -> None:
     """The boundary, interior walls, tables and sensed chairs, each named in the legend."""
     ax.add_patch(Rectangle((0.0, 0.0), scene.width, scene.depth, facecolor=ROOM_FACE,
@@ -148,9 +156,9 @@ def _draw_room(ax: Axes, scene: Scene, handles: list[Patch | Line2D]) -> None:
         handles.append(Patch(facecolor=WALL, edgecolor=WALL, label="wall"))
     for table in scene.tables:
         target = table.name == scene.target
-        ax.add_patch(_polygon(table.box, facecolor=TABLE_TAN,
-                              edgecolor=TARGET_EDGE if target else TABLE_EDGE,
-                              linewidth=2.6 if target else 1.0, zorder=2))
+        ax.add_patch(_table_patch(table, facecolor=TABLE_TAN,
+                                  edgecolor=TARGET_EDGE if target else TABLE_EDGE,
+                                  linewidth=2.6 if target else 1.0, zorder=2))
         label = f"{table.name}\n(target)" if target else table.name
         ax.text(table.box.x, table.box.y, label, ha="center", va="center", fontsize=7.5,
                 fontweight="bold" if target else "normal", color="#3d2b14", zorder=9,

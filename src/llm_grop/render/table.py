@@ -26,6 +26,7 @@ from matplotlib.transforms import offset_copy
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Arrangement, Placement
 from llm_grop.world.relation import CENTER, STACKING
+from llm_grop.world.seat import Seat
 
 #: Picture size in inches and resolution in dots per inch (1200 x 1050 pixels).
 FIGSIZE_IN = (8.0, 7.0)
@@ -110,18 +111,21 @@ def draw_table_on(ax: Axes, arrangement: Arrangement, *, show_relations: bool = 
                   compact: bool = False) -> None:
     """Draw ``arrangement`` top-down onto ``ax``, in its table frame (data units: metres).
 
-    The table top, the diner at its -y edge and every object are drawn to scale with
-    equal aspect; tick labels read in centimetres. ``show_relations`` adds an arrow from
-    each relation's subject to its reference. ``compact`` draws smaller labels and no axis
-    labels or tick labels (and never a legend), for an inset or a small panel. The
-    figure's title is left to the caller.
+    The table top (a rectangle or a circle), the diner at its -y edge and every object
+    are drawn to scale with equal aspect; tick labels read in centimetres.
+    ``show_relations`` adds an arrow from each relation's subject to its reference.
+    ``compact`` draws smaller labels and no axis labels or tick labels (and never a
+    legend), for an inset or a small panel. The figure's title is left to the caller.
     """
     ax.set_facecolor(BACKGROUND)
     table = arrangement.table
     w, d = table.width, table.depth
-    ax.add_patch(Rectangle((-w / 2, -d / 2), w, d, facecolor=TABLE_FACE, edgecolor=TABLE_EDGE,
-                           linewidth=1.2 if compact else 2.0, zorder=1))
-    _draw_diner(ax, d, compact)
+    top = {"facecolor": TABLE_FACE, "edgecolor": TABLE_EDGE,
+           "linewidth": 1.2 if compact else 2.0, "zorder": 1}
+    ax.add_patch(Circle((0.0, 0.0), w / 2, **top) if table.is_round
+                 else Rectangle((-w / 2, -d / 2), w, d, **top))
+    for k, seat in enumerate(table.seats):
+        _draw_diner(ax, seat, f"diner {k}" if len(table.seats) > 1 else "diner", compact)
     stacks = _stacks(arrangement.placements)
     by_name = {p.name: p for p in arrangement.placements}
     order = sorted(range(len(arrangement.placements)),
@@ -141,13 +145,21 @@ def draw_table_on(ax: Axes, arrangement: Arrangement, *, show_relations: bool = 
     _set_limits(ax, arrangement, compact)
 
 
-def _draw_diner(ax: Axes, depth: float, compact: bool = False) -> None:
-    edge = -depth / 2
-    ax.add_patch(Wedge((0.0, edge - 0.10), 0.07, 0, 180, facecolor="#c8c8c8",
+def _draw_diner(ax: Axes, seat: Seat, label: str, compact: bool = False) -> None:
+    """A diner at ``seat`` (table frame), facing the way the seat faces: shoulders behind
+    the edge, head towards the table, and a label behind them."""
+    c, s = math.cos(seat.yaw), math.sin(seat.yaw)
+
+    def at(back: float) -> tuple[float, float]:
+        return (seat.x - back * c, seat.y - back * s)
+
+    facing = math.degrees(seat.yaw)
+    ax.add_patch(Wedge(at(0.10), 0.07, facing - 90, facing + 90, facecolor="#c8c8c8",
                        edgecolor="#7a7a7a", linewidth=1.0, zorder=1))
-    ax.add_patch(Circle((0.0, edge - 0.055), 0.022, facecolor="#c8c8c8", edgecolor="#7a7a7a",
+    ax.add_patch(Circle(at(0.055), 0.022, facecolor="#c8c8c8", edgecolor="#7a7a7a",
                         linewidth=1.0, zorder=1))
-    ax.text(0.0, edge - 0.115, "diner", ha="center", va="top", fontsize=6 if compact else 9,
+    x, y = at(0.13)
+    ax.text(x, y, label, ha="center", va="center", fontsize=6 if compact else 9,
             color="#444444", zorder=1)
 
 
@@ -278,6 +290,9 @@ def _set_limits(ax: Axes, arrangement: Arrangement, compact: bool = False) -> No
     w, d = arrangement.table.width, arrangement.table.depth
     x0, x1 = -w / 2 - _MARGIN_M, w / 2 + _MARGIN_M
     y0, y1 = -d / 2 - _DINER_SPACE_M, d / 2 + _MARGIN_M
+    for seat in arrangement.table.diners:
+        x0, x1 = min(x0, seat.x - _DINER_SPACE_M), max(x1, seat.x + _DINER_SPACE_M)
+        y0, y1 = min(y0, seat.y - _DINER_SPACE_M), max(y1, seat.y + _DINER_SPACE_M)
     for p in arrangement.placements:
         r = math.hypot(*p.size) / 2 if p.shape == "box" else p.size[0] / 2
         x0, x1 = min(x0, p.x - r - _MARGIN_M), max(x1, p.x + r + _MARGIN_M)
@@ -322,8 +337,9 @@ def _draw_title(fig: Figure, arrangement: Arrangement, title: str | None) -> Non
                     va="top", fontsize=11, fontweight="bold")
     names = [p.name for p in arrangement.placements]
     table = arrangement.table
-    listed = (f"objects ({len(names)}): {', '.join(names) or 'none'}  |  table "
-              f"{table.width * 100:g} \u00d7 {table.depth * 100:g} cm")
+    top = (f"round table \u00f8 {table.width * 100:g} cm" if table.is_round
+           else f"table {table.width * 100:g} \u00d7 {table.depth * 100:g} cm")
+    listed = f"objects ({len(names)}): {', '.join(names) or 'none'}  |  {top}"
     fig.axes[0].annotate(_clip_lines(listed, _TITLE_WIDTH_CHARS + 15, 2), xy=(0.5, 0.0),
                          xycoords=head, xytext=(0, -5), textcoords="offset points",
                          ha="center", va="top", fontsize=8.5, color="#333333",

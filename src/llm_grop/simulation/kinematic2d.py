@@ -8,7 +8,9 @@ uncertainty as a black box, as in the paper).
   ``nav_attempts`` failures it tries the plan's next fallback standing position; when all
   fail, the object is abandoned.
 * Arrival has Gaussian pose noise; picks and places succeed with their true probability
-  for the real reach, retried up to ``manip_attempts`` times.
+  for the real reach, retried up to ``manip_attempts`` times. A place that still fails
+  is tried again from the plan's fallback standing positions for it, in turn (the robot
+  drives there first), before the object is abandoned.
 * A placed object lands at its target plus small Gaussian noise. An object whose support
   never arrived rests on the table. The final arrangement is read from where objects are.
 """
@@ -76,13 +78,25 @@ class Kinematic2D:
                 replan: PathPlanner) -> Execution:
         """Run ``plan`` in ``scene``; its chairs are the real ones."""
         run = Run(self.options, plan, scene, rng, replan)
+        fallbacks: tuple[Pose2D, ...] = ()
         for step in plan.steps:
             if step.object in run.abandoned:
                 continue
             if step.action == "navigate":
                 run.navigate(step)
-            else:
-                run.manipulate(step)
+                fallbacks = step.alternatives
+                continue
+            run.manipulate(step)
+            if step.action != "place":
+                continue
+            for goal in fallbacks:
+                if step.object not in run.abandoned:
+                    break
+                # Step round the table and try the place from the next fallback position.
+                run.abandoned.discard(step.object or "")
+                run.navigate(Step("navigate", step.object, goal))
+                if step.object not in run.abandoned:
+                    run.manipulate(step)
         order = {p.name: i for i, p in enumerate(plan.configuration)}
         final = tuple(sorted(run.placed.values(), key=lambda p: order.get(p.name, 0)))
         unplaced = tuple(n for n in plan.order if n not in run.placed)
@@ -190,8 +204,7 @@ class Run:
         dx, dy = self.rng.normal(0.0, self.o.place_noise_std_m, 2)
         dyaw = float(self.rng.normal(0.0, self.o.place_yaw_noise_std_rad))
         on = t.on if t.on in self.placed else None
-        return Placement(t.name, t.x + float(dx), t.y + float(dy), t.yaw + dyaw, t.shape,
-                         t.size, on, t.kind, t.height)
+        return replace(t, x=t.x + float(dx), y=t.y + float(dy), yaw=t.yaw + dyaw, on=on)
 
     def record(self, step: ExecutedStep) -> None:
         log.debug("%s %s: %s (%.1f s)", step.action, step.object or "",

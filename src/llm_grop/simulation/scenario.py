@@ -19,7 +19,7 @@ from shapely.geometry import box as rect
 from llm_grop import seeds
 from llm_grop.errors import BadInput, Infeasible
 from llm_grop.world.arrangement import Item
-from llm_grop.world.geometry2d import Box
+from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.jsonio import rounded
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
 
@@ -37,6 +37,10 @@ CHAIR_CLEARANCE_M = 0.01
 #: Waiting objects lie at most this far, metres, from a table edge the robot can stand at,
 #: so that the arm reaches them comfortably.
 EDGE_BAND_M = 0.20
+#: Chairs at a round table stand within this angle, radians, either side of its ±y axis.
+ROUND_ARC_RAD = math.pi / 4
+#: Step, metres, of the sweep along a crowded supply table's edge (see ``_free_spot``).
+SWEEP_STEP_M = 0.01
 #: Draws per chair and per object and table before giving up.
 TRIES = 200
 #: Times the whole set of chairs is drawn afresh before giving up.
@@ -53,7 +57,8 @@ def prepare_episode(scene: Scene, items: Sequence[Item], seed: int, *,
     goes to the first item of that kind only), else a random spot on a supply table, the
     items spread round-robin over the supply tables. With ``chairs`` an int, that many
     chairs of ``chair_size_m`` (width, depth in metres) replace the scene's, on either long
-    side of the target table, their near edge ``scene.chair_band_m`` from the table's edge;
+    side of the target table (a round one: on the arcs within 45 degrees of its ±y axis,
+    facing its centre), their near edge ``scene.chair_band_m`` from the table's edge;
     with ``None`` the scene's chairs stay.
 
     Raises :class:`BadInput` for a negative ``chairs`` and :class:`Infeasible` when the
@@ -85,7 +90,8 @@ def _sample_chairs(scene: Scene, n: int, size: tuple[float, float],
 def _chair_round(scene: Scene, n: int, size: tuple[float, float],
                  rng: np.random.Generator) -> list[Chair]:
     """Up to ``n`` chairs placed one after another; fewer when one does not fit."""
-    table = scene.target_table.box
+    target = scene.target_table
+    table = target.box
     lo, hi = scene.chair_band_m
     cw, cd = size
     room = rect(0.0, 0.0, scene.width, scene.depth)
@@ -96,10 +102,17 @@ def _chair_round(scene: Scene, n: int, size: tuple[float, float],
     for k in range(n):
         for _ in range(TRIES):
             side = 1.0 if rng.random() < 0.5 else -1.0
-            u = rng.uniform(-table.width / 2, table.width / 2)
-            v = side * (table.depth / 2 + rng.uniform(lo, hi) + cd / 2)
+            if target.is_round:
+                # Round the arc on that side, the chair's back away from the centre.
+                phi = side * math.pi / 2 + rng.uniform(-ROUND_ARC_RAD, ROUND_ARC_RAD)
+                reach = table.width / 2 + rng.uniform(lo, hi) + cd / 2
+                u, v = reach * math.cos(phi), reach * math.sin(phi)
+                yaw = rounded(table.yaw + phi - math.pi / 2)
+            else:
+                u = rng.uniform(-table.width / 2, table.width / 2)
+                v, yaw = side * (table.depth / 2 + rng.uniform(lo, hi) + cd / 2), table.yaw
             x, y = (rounded(c) for c in table.to_room(u, v))
-            box = Box(x, y, cw, cd, table.yaw)
+            box = Box(x, y, cw, cd, yaw)
             grown = _poly(box).buffer(CHAIR_CLEARANCE_M, join_style="mitre")
             if (room.contains(grown) and not grown.intersects(keep_off)
                     and not any(grown.intersects(p) for p in blocked)):
@@ -121,7 +134,8 @@ def _assign_sources(scene: Scene, items: Sequence[Item],
             used.add(s)
             given[item.name] = ObjectSource(item.name, s.table, s.x, s.y)
     radius = {i.name: _radius(i) for i in items}
-    taken = [(s.x, s.y, radius[n]) for n, s in given.items()]
+    half = {i.name: (i.spec.size[0] / 2, i.spec.size[1] / 2) for i in items}
+    taken = [(s.x, s.y, radius[n], *half[n]) for n, s in given.items()]
     supply = scene.supply_tables
     out: list[ObjectSource] = []
     turn = 0
@@ -134,14 +148,14 @@ def _assign_sources(scene: Scene, items: Sequence[Item],
                              "besides the target")
         for j in range(len(supply)):
             table = supply[(turn + j) % len(supply)]
-            spot = _free_spot(scene, table, taken, radius[item.name], rng)
+            spot = _free_spot(scene, table, taken, radius[item.name], rng, half[item.name])
             if spot is not None:
                 break
         else:
             names = ", ".join(repr(t.name) for t in supply)
             raise Infeasible(f"cannot fit {item.name!r} on the supply tables ({names})")
         turn += 1
-        taken.append((*spot, radius[item.name]))
+        taken.append((*spot, radius[item.name], *half[item.name]))
         out.append(ObjectSource(item.name, table.name, *spot))
     return tuple(out)
 
@@ -154,11 +168,18 @@ def _radius(item: Item) -> float:
     return max(OBJECT_RADIUS_M, r)
 
 
-def _free_spot(scene: Scene, table: SceneTable, taken: list[tuple[float, float, float]],
-               radius: float, rng: np.random.Generator) -> tuple[float, float] | None:
+def _free_spot(scene: Scene, table: SceneTable,
+               taken: list[tuple[float, float, float, float, float]], radius: float,
+               rng: np.random.Generator, half: tuple[float, float] = (0.0, 0.0)
+               ) -> tuple[float, float] | None:
     """A random room-frame point on ``table``, within :data:`EDGE_BAND_M` of an edge the
     robot can stand at, whose object disc (``radius`` metres) is clear of the edge and of
-    the discs ``(x, y, radius)`` in ``taken``; ``None`` when none turns up."""
+    the discs ``(x, y, radius, ...)`` in ``taken``; ``None`` when none turns up.
+
+    When random draws find no room, the band along each open side is swept for the first
+    spot where the object's footprint (half sides ``half``, unturned in the room) keeps
+    :data:`OBJECT_GAP_M` from every waiting footprint: a fork stood across a counter's
+    edge takes a few centimetres of it, not the disc round it."""
     box = table.box
     inset = EDGE_MARGIN_M + radius
     hw, hd = box.width / 2 - inset, box.depth / 2 - inset
@@ -170,8 +191,13 @@ def _free_spot(scene: Scene, table: SceneTable, taken: list[tuple[float, float, 
     for _ in range(TRIES):
         du, dv = sides[int(rng.integers(len(sides)))]
         u, v = rng.uniform(-hw, hw), rng.uniform(-hd, hd)
+        if table.is_round:
+            # On the arc facing the open side, its edge gap between the inset and the band.
+            phi = math.atan2(dv, du) + rng.uniform(-ROUND_ARC_RAD, ROUND_ARC_RAD)
+            reach = box.width / 2 - rng.uniform(inset, max(inset, EDGE_BAND_M))
+            u, v = reach * math.cos(phi), reach * math.sin(phi)
         # Pull the point towards the chosen open side, into the band along it.
-        if du:
+        elif du:
             u = du * (box.width / 2 - min(box.width / 2 - u * du, EDGE_BAND_M))
             u = float(np.clip(u, -hw, hw))
         else:
@@ -179,8 +205,26 @@ def _free_spot(scene: Scene, table: SceneTable, taken: list[tuple[float, float, 
             v = float(np.clip(v, -hd, hd))
         x, y = (rounded(c) for c in box.to_room(u, v))
         if all(math.hypot(x - tx, y - ty) >= radius + tr + OBJECT_GAP_M
-               for tx, ty, tr in taken):
+               for tx, ty, tr, _, _ in taken):
             return (x, y)
+    if table.is_round or box.yaw != 0.0:
+        return None
+    # A crowded table (several diners' tableware): sweep each open side's band in
+    # :data:`SWEEP_STEP_M` steps for the first free spot, so the tables fill up.
+    bw = box.width / 2 - EDGE_MARGIN_M - half[0]
+    bd = box.depth / 2 - EDGE_MARGIN_M - half[1]
+    if bw < 0 or bd < 0:
+        return None
+    for du, dv in sides:
+        along = np.arange(-(bd if du else bw), (bd if du else bw) + 1e-9, SWEEP_STEP_M)
+        for t in along:
+            u = du * bw if du else float(t)
+            v = dv * bd if dv else float(t)
+            x, y = (rounded(c) for c in box.to_room(u, v))
+            if all(abs(x - tx) >= half[0] + hx + OBJECT_GAP_M
+                   or abs(y - ty) >= half[1] + hy + OBJECT_GAP_M
+                   for tx, ty, _, hx, hy in taken):
+                return (x, y)
     return None
 
 
@@ -201,5 +245,6 @@ def _open_sides(scene: Scene, table: SceneTable) -> list[tuple[int, int]]:
     return out
 
 
-def _poly(b: Box) -> Polygon:
-    return Polygon(b.corners())
+def _poly(b: Box | Disc) -> Polygon:
+    """``b``'s outline as a shapely polygon (room frame, metres)."""
+    return Polygon(b.outline())

@@ -16,11 +16,13 @@ class Item:
     """One requested object: an instance ``name`` of catalog kind ``spec``.
 
     The first instance of a kind is named after it ("dinner fork"); further ones
-    get a number ("dinner fork 2").
+    get a number ("dinner fork 2"). ``diner`` is the index of the diner whose setting
+    it belongs to (into the table's ``diners``), ``None`` for a request with one diner.
     """
 
     name: str
     spec: ObjectSpec
+    diner: int | None = None
 
     @property
     def kind(self) -> str:
@@ -34,7 +36,8 @@ class Placement:
 
     ``x``, ``y`` in metres; ``yaw`` in radians (object frame -> table frame,
     counter-clockwise); ``size`` is the footprint ``(sx, sy)`` in metres in the
-    object's own frame; ``on`` names the object it rests on (``None``: the table).
+    object's own frame; ``on`` names the object it rests on (``None``: the table);
+    ``diner`` is the index of the diner whose setting it belongs to (``None``: one diner).
     """
 
     name: str
@@ -46,13 +49,15 @@ class Placement:
     on: str | None = None
     kind: str = ""
     height: float = 0.0
+    diner: int | None = None
 
 
 def item_placement(item: Item) -> Placement:
     """``item`` as a placement at the table's centre: its shape, footprint and height,
     for code that needs an object's dimensions before it has a place."""
     s = item.spec
-    return Placement(item.name, 0.0, 0.0, 0.0, s.shape, s.size, None, s.name, s.height)
+    return Placement(item.name, 0.0, 0.0, 0.0, s.shape, s.size, None, s.name, s.height,
+                     item.diner)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import json
 import re
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, Strict
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, Strict, model_validator
 
 from llm_grop.world.relation import RELATION_NAMES
 from llm_grop.world.scene_file import SceneFile
@@ -62,6 +62,17 @@ class TableDoc(Doc):
 
     shape: Literal["rectangle", "circle"] = "rectangle"
     size: Size
+    diners: list[tuple[Num, Num, Num]] | None = Field(
+        None, description="the diners' seat poses [x, y, yaw] in the table frame (yaw: the "
+                          "way the diner faces); absent: one diner at the -y edge")
+
+    @model_validator(mode="after")
+    def _round_is_square(self) -> TableDoc:
+        # A circle has one size; [1.2, 0.8] would be a round table in a rectangular frame.
+        if self.shape == "circle" and abs(self.size[0] - self.size[1]) > 1e-6:
+            raise ValueError(f"a round table (shape circle) has one size, its diameter: "
+                             f"expected [d, d], got [{self.size[0]:g}, {self.size[1]:g}]")
+        return self
 
 
 class ObjectDoc(Doc):
@@ -81,6 +92,9 @@ class ObjectDoc(Doc):
     size: Size | None = Field(None, description="footprint [sx, sy] in metres in the "
                                                 "object's own frame; circles use [d, d]")
     on: Name | None = Field(None, description="the object this one rests on; null: the table")
+    diner: Annotated[int, Strict(), Field(ge=0)] | None = Field(
+        None, description="index into table.diners of the diner whose setting this object "
+                          "belongs to; null: a shared object, or the one diner")
     kind: Name | None = Field(None, description="the catalog kind (default: the name without "
                                                 "a trailing number)")
     height: Annotated[float, Strict(), Field(ge=0, allow_inf_nan=False)] | None = Field(
@@ -158,6 +172,56 @@ class StandingDoc(Doc):
     pose: RoomPose
 
 
+class GapDoc(Doc):
+    """One relation's gap between edges: as stated (by the LLM or a preference) and as
+    realised in the configuration, metres."""
+
+    subject: Name
+    relation: RelationName
+    reference: Name
+    stated_m: Num
+    realised_m: Num
+    error_m: Num = Field(description="realised minus stated, metres")
+
+
+class FidelityDoc(Doc):
+    """How faithfully a configuration keeps the stated geometry (metres)."""
+
+    infidelity_m: Num = Field(description="summed |realised - stated| over the gaps plus the "
+                                          "origin's shift; what the fidelity weight charges")
+    max_gap_error_m: Num = Field(description="largest |realised - stated| over the gaps and "
+                                             "the distance from the diner's edge")
+    origin: Text = Field(description="the layout's origin object ('' when none)")
+    origin_shift_m: Num = Field(description="how far the origin lies from its guided position")
+    edge_stated_m: Num | None = Field(None, description="the origin's stated distance from "
+                                                        "the diner's edge of the table")
+    edge_realised_m: Num | None = None
+    gaps: list[GapDoc] | None = Field(None, description="per relation (chosen configuration "
+                                                        "only)")
+
+
+class ConsideredDoc(Doc):
+    """One of the M configurations as GROP scored it; ``utility`` and ``score`` are null
+    when it has no plan."""
+
+    index: Int
+    expected_utility: Num | None
+    feasibility: Num | None
+    expected_cost_s: Num | None
+    score: Num | None = Field(description="expected utility minus the fidelity penalty, s")
+    fidelity: FidelityDoc
+
+
+class PlanFidelityDoc(Doc):
+    """The fidelity of the plan's choice: the weight, the chosen configuration's fidelity
+    and every configuration evaluated."""
+
+    weight_s_per_cm: Num = Field(description="seconds of utility one centimetre of "
+                                             "infidelity costs")
+    chosen: FidelityDoc
+    configurations: list[ConsideredDoc]
+
+
 class PlanDoc(Doc):
     """The chosen task-motion plan: expected utility and costs in seconds."""
 
@@ -169,6 +233,9 @@ class PlanDoc(Doc):
     feasibility: Num = Field(description="probability that every action succeeds at once")
     expected_cost_s: Num
     expected_duration_s: Num
+    fidelity: PlanFidelityDoc | None = Field(None, description="how faithfully the chosen "
+                                                               "and the other configurations "
+                                                               "keep the stated geometry")
 
 
 class RunDoc(Doc):
@@ -212,6 +279,9 @@ class RatingDoc(Doc):
     score: Annotated[int, Strict(), Field(ge=1, le=5)]
     summary: Text
     checks: list[CheckDoc]
+    diners: list[RatingDoc] | None = Field(None, description="with several diners, each "
+                                                             "diner's rating; the score is "
+                                                             "the lowest")
 
 
 class TrialRow(RunDoc):

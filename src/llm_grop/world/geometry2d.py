@@ -1,4 +1,4 @@
-"""Poses and rectangles in the room frame (metres, radians). Representation only."""
+"""Poses, rectangles and discs in the room frame (metres, radians). Representation only."""
 
 from __future__ import annotations
 
@@ -55,3 +55,32 @@ class Box:
         """Whether room-frame point ``(x, y)`` is inside the box grown by ``margin`` metres."""
         u, v = self.to_local(x, y)
         return abs(u) <= self.width / 2 + margin and abs(v) <= self.depth / 2 + margin
+
+    def outline(self) -> tuple[tuple[float, float], ...]:
+        """The footprint's outline as polygon vertices in the room frame: its corners."""
+        return self.corners()
+
+
+@dataclass(frozen=True)
+class Disc:
+    """A circle in the room frame: centre ``(x, y)`` and ``radius``, metres."""
+
+    x: float
+    y: float
+    radius: float
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        """Whether room-frame point ``(x, y)`` is inside the disc grown by ``margin`` metres."""
+        return math.hypot(x - self.x, y - self.y) <= self.radius + margin
+
+    def outline(self, segments: int = 64) -> tuple[tuple[float, float], ...]:
+        """A regular polygon of ``segments`` sides round the disc, counter-clockwise.
+
+        Its sides touch the circle (the vertices lie ``radius / cos(pi / segments)`` from
+        the centre), so the polygon covers the whole disc: an obstacle drawn from it is
+        never smaller than the true one (by under 1 mm for a 1.2 m table at 64 sides).
+        """
+        r = self.radius / math.cos(math.pi / segments)
+        return tuple((self.x + r * math.cos(2 * math.pi * k / segments),
+                      self.y + r * math.sin(2 * math.pi * k / segments))
+                     for k in range(segments))

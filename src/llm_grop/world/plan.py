@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from llm_grop.world.arrangement import Arrangement, Placement
+from llm_grop.world.fidelity import Considered, Fidelity
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.scene import Scene
 
@@ -68,6 +69,10 @@ class Plan:
         feasibility: the probability that every action succeeds first time.
         cost_s: expected duration without failures (navigation and manipulation), seconds.
         configurations_considered: how many configurations were planned for (M).
+        fidelity: how faithfully the chosen configuration keeps the stated geometry.
+        considered: every configuration GROP evaluated, with its utility, fidelity and
+            score (utility minus the fidelity penalty).
+        fidelity_w_s_per_cm: the fidelity weight, seconds per centimetre, of the choice.
     """
 
     order: tuple[str, ...]
@@ -78,6 +83,9 @@ class Plan:
     feasibility: float
     cost_s: float
     configurations_considered: int = 1
+    fidelity: Fidelity = Fidelity()
+    considered: tuple[Considered, ...] = ()
+    fidelity_w_s_per_cm: float = 0.0
 
 
 @dataclass(frozen=True)

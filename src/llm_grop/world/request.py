@@ -24,6 +24,10 @@ How a request is read:
 
 Items keep the order in which their kind is first mentioned; repeated mentions add
 instances ("a fork ... and another fork" gives two dinner forks).
+
+A request may set the table for several diners: "for two", "for 4 people", "four place
+settings with ...". The objects it names are then one diner's setting, and every diner
+gets one (:func:`for_diners`): the second diner's plate is "dinner plate 2".
 """
 
 from __future__ import annotations
@@ -85,10 +89,61 @@ _TOKEN = re.compile(r"[^\W_]+(?:'[^\W_]+)*")
 
 @dataclass(frozen=True)
 class Request:
-    """A user's request: its ``text`` and the catalog ``items`` it asks for, in order."""
+    """A user's request: its ``text``, the catalog ``items`` it asks for, in order, and
+    how many ``diners`` it sets the table for (the items are then every diner's, each
+    with its ``diner`` index)."""
 
     text: str
     items: tuple[Item, ...]
+    diners: int = 1
+
+
+#: Most diners one request may set the table for.
+MAX_DINERS = 12
+
+_DINER_NUMBER = r"(\d+|" + "|".join(_NUMBERS) + ")"
+_DINERS = (
+    re.compile(r"\bfor\s+" + _DINER_NUMBER + r"(?:\s+(?:people|persons|diners|guests|of\s+us))?"
+               r"(?![\w'])"),
+    re.compile(r"\b" + _DINER_NUMBER + r"\s+(?:place\s+settings|settings|places|covers)\b"),
+)
+
+
+def _diner_count(text: str) -> tuple[int, str]:
+    """How many diners ``text`` sets the table for, and the text without that phrase."""
+    low = text.lower()
+    for pattern in _DINERS:
+        m = pattern.search(low)
+        if m:
+            word = m.group(1)
+            n = int(word) if word.isascii() and word.isdigit() else _NUMBERS.get(word, 0)
+            if not 1 <= n <= MAX_DINERS:
+                raise BadInput(f"request: {m.group(0)!r}: between 1 and {MAX_DINERS} diners")
+            return n, text[:m.start()] + " " + text[m.end():]
+    return 1, text
+
+
+def for_diners(items: Sequence[Item], diners: int) -> tuple[Item, ...]:
+    """One setting of ``items`` for each of ``diners`` diners, numbered across them
+    (the second diner's "dinner plate" is "dinner plate 2"); one diner: ``items`` as
+    they are."""
+    if diners == 1:
+        return tuple(items)
+    per_kind: dict[str, int] = {}
+    for it in items:
+        per_kind[it.kind] = per_kind.get(it.kind, 0) + 1
+    total = len(items) * diners
+    if total > MAX_OBJECTS:
+        raise BadInput(f"request: {diners} diners x {len(items)} objects is {total}; "
+                       f"at most {MAX_OBJECTS} objects in all")
+    out = []
+    for d in range(diners):
+        seen: dict[str, int] = {}
+        for it in items:
+            seen[it.kind] = seen.get(it.kind, 0) + 1
+            k = d * per_kind[it.kind] + seen[it.kind]
+            out.append(Item(it.kind if k == 1 else f"{it.kind} {k}", it.spec, d))
+    return tuple(out)
 
 
 @dataclass
@@ -255,11 +310,12 @@ def parse_request(text: str, catalog: Catalog) -> Request:
     """
     if not text.strip():
         raise BadInput(f"request: empty; name the objects to set, {_EXAMPLE}")
-    mentions = _Reader(text, catalog).read()
+    diners, rest = _diner_count(text)
+    mentions = _Reader(rest, catalog).read()
     if not mentions:
         raise BadInput(f"request: no object named in {text.strip()!r}; "
                        f"name the objects to set, {_EXAMPLE}")
-    return Request(text.strip(), _items(mentions))
+    return Request(text.strip(), for_diners(_items(mentions), diners), diners)
 
 
 def items_from_names(names: Sequence[str], catalog: Catalog, where: str = "objects"
@@ -275,4 +331,5 @@ def items_from_names(names: Sequence[str], catalog: Catalog, where: str = "objec
     return _items(mentions)
 
 
-__all__ = ["MAX_OBJECTS", "Request", "items_from_names", "parse_request"]
+__all__ = ["MAX_DINERS", "MAX_OBJECTS", "Request", "for_diners", "items_from_names",
+           "parse_request"]

@@ -12,7 +12,17 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from llm_grop.world.contract import PlanDoc, RunDoc, StandingDoc, StepDoc
+from llm_grop.world.contract import (
+    ConsideredDoc,
+    FidelityDoc,
+    GapDoc,
+    PlanDoc,
+    PlanFidelityDoc,
+    RunDoc,
+    StandingDoc,
+    StepDoc,
+)
+from llm_grop.world.fidelity import Considered, Fidelity
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.jsonio import rounded
 from llm_grop.world.plan import ExecutedStep, Plan, RunResult
@@ -57,7 +67,33 @@ def plan_doc(plan: Plan) -> PlanDoc:
         expected_utility=round(plan.utility, 3),
         feasibility=round(plan.feasibility, 4),
         expected_cost_s=round(plan.cost_s, 3),
-        expected_duration_s=round(sum(s.duration_s for s in plan.steps), 3))
+        expected_duration_s=round(sum(s.duration_s for s in plan.steps), 3),
+        fidelity=PlanFidelityDoc(
+            weight_s_per_cm=plan.fidelity_w_s_per_cm,
+            chosen=fidelity_doc(plan.fidelity, gaps=True),
+            configurations=[considered_doc(c) for c in plan.considered]))
+
+
+def _r(value: float | None, digits: int = 4) -> float | None:
+    return None if value is None else round(value, digits)
+
+
+def fidelity_doc(f: Fidelity, *, gaps: bool = False) -> FidelityDoc:
+    """``f`` as the contract's document; ``gaps`` adds the per-relation figures."""
+    return FidelityDoc(
+        infidelity_m=round(f.infidelity_m, 4), max_gap_error_m=round(f.max_gap_error_m, 4),
+        origin=f.origin, origin_shift_m=round(f.origin_shift_m, 4),
+        edge_stated_m=_r(f.edge_stated_m), edge_realised_m=_r(f.edge_realised_m),
+        gaps=[GapDoc(subject=g.subject, relation=g.relation, reference=g.reference,
+                     stated_m=round(g.stated_m, 4), realised_m=round(g.realised_m, 4),
+                     error_m=round(g.error_m, 4)) for g in f.gaps] if gaps else None)
+
+
+def considered_doc(c: Considered) -> ConsideredDoc:
+    """One configuration as GROP scored it, as the contract's document."""
+    return ConsideredDoc(index=c.index, expected_utility=_r(c.utility, 3),
+                         feasibility=_r(c.feasibility), expected_cost_s=_r(c.cost_s, 3),
+                         score=_r(c.score, 3), fidelity=fidelity_doc(c.fidelity))
 
 
 def run_doc(r: RunResult, *, llm_log: bool = True) -> RunDoc:

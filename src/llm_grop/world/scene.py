@@ -12,18 +12,50 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
-from llm_grop.world.geometry2d import Box, Pose2D
+from llm_grop.errors import BadInput
+from llm_grop.world.geometry2d import Box, Disc, Pose2D
 from llm_grop.world.robot import Robot
-from llm_grop.world.table import Table
+from llm_grop.world.seat import Seat
+from llm_grop.world.table import Table, TableShape
 
 
 @dataclass(frozen=True)
 class SceneTable:
-    """A table in the room: ``name`` and its top ``box`` (room frame); ``height`` in metres."""
+    """A table in the room: ``name``, its top's ``box`` (room frame), ``height`` in metres
+    and ``shape``.
+
+    A round top (``shape="circle"``) is the disc inscribed in ``box``, a square whose
+    side is the diameter; ``box`` keeps giving its centre, yaw (the table frame's
+    orientation) and bounding square. Use :attr:`footprint` or :meth:`contains` for
+    the true outline. Raises :class:`BadInput` for a round top whose box is not square.
+    """
 
     name: str
     box: Box
     height: float = 0.75
+    shape: TableShape = "rectangle"
+
+    def __post_init__(self) -> None:
+        if self.shape == "circle" and not math.isclose(self.box.width, self.box.depth,
+                                                       rel_tol=0.0, abs_tol=1e-6):
+            raise BadInput(f"table {self.name!r}: a round table has one size, its diameter, "
+                           f"but was given {self.box.width:g} x {self.box.depth:g} m")
+
+    @property
+    def is_round(self) -> bool:
+        """Whether the top is a circle."""
+        return self.shape == "circle"
+
+    @property
+    def footprint(self) -> Box | Disc:
+        """The top's true outline in the room frame: ``box``, or the disc inside it."""
+        if self.is_round:
+            return Disc(self.box.x, self.box.y, self.box.width / 2)
+        return self.box
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        """Whether room-frame point ``(x, y)`` is on the top grown by ``margin`` metres."""
+        return self.footprint.contains(x, y, margin)
 
 
 @dataclass(frozen=True)
@@ -65,7 +97,8 @@ class Scene:
         chairs_listed: whether the scene states its chairs (an empty list: none), so an
             episode keeps them instead of sampling one.
         chair_band_m: chairs are sampled between these distances (metres) from the target
-            table's ±y sides (the diner's side and the far side, in the table's frame).
+            table's ±y sides (the diner's side and the far side, in the table's frame);
+            from a round table's edge, round the arcs on those two sides.
     """
 
     name: str
@@ -81,6 +114,7 @@ class Scene:
     robot: Robot = field(default_factory=Robot)
     chair_band_m: tuple[float, float] = (0.0, 1.0)
     chairs_listed: bool = False
+    diners: tuple[Seat, ...] = ()
 
     def table(self, name: str) -> SceneTable:
         """The table called ``name``; ``KeyError`` if there is none."""
@@ -96,9 +130,20 @@ class Scene:
 
     @property
     def target_top(self) -> Table:
-        """The target table's top as the arrangement's :class:`Table` (width, depth)."""
-        box = self.target_table.box
-        return Table(box.width, box.depth)
+        """The target table's top as the arrangement's :class:`Table` (width, depth and
+        shape; a round top's width and depth are its diameter)."""
+        t = self.target_table
+        return Table(t.box.width, t.box.depth, t.shape, self.diners)
+
+    def with_target_top(self, top: Table) -> Scene:
+        """This scene with the target table's top replaced by ``top`` (same centre, yaw
+        and height). Nothing is checked here; see
+        :func:`llm_grop.world.scene_file.set_target_top`."""
+        t = self.target_table
+        box = replace(t.box, width=top.width, depth=top.depth)
+        tables = tuple(replace(t, box=box, shape=top.shape) if u.name == t.name else u
+                       for u in self.tables)
+        return replace(self, tables=tables)
 
     @property
     def supply_tables(self) -> tuple[SceneTable, ...]:
@@ -106,9 +151,10 @@ class Scene:
         names = self.source_tables or tuple(t.name for t in self.tables if t.name != self.target)
         return tuple(self.table(n) for n in names)
 
-    def static_obstacles(self) -> tuple[Box, ...]:
-        """The pre-built map's obstacles: interior walls and every table (no chairs)."""
-        return self.walls + tuple(t.box for t in self.tables)
+    def static_obstacles(self) -> tuple[Box | Disc, ...]:
+        """The pre-built map's obstacles: interior walls and every table's true outline
+        (a :class:`Disc` for a round one; no chairs)."""
+        return self.walls + tuple(t.footprint for t in self.tables)
 
     def source_for(self, item: str, kind: str) -> ObjectSource | None:
         """Where item ``item`` (of catalog kind ``kind``) starts, if the scene says."""

@@ -6,7 +6,8 @@ The file's layout (room frame: metres and radians, the room spans ``[0, width] x
     name: dining room
     room: {width: 8.0, depth: 6.0}
     walls: [{center: [x, y], size: [w, d], yaw: 0.0}]
-    tables: [{name: dining table, center: [x, y], size: [w, d], yaw: 0.0, height: 0.75}]
+    tables: [{name: dining table, center: [x, y], size: [w, d], yaw: 0.0, height: 0.75},
+             {name: round table, shape: circle, center: [x, y], diameter: 1.2}]  # or size: [d, d]
     target: dining table
     source_tables: [kitchen counter]                      # optional
     sources: [{object: mug, table: kitchen counter, position: [x, y]}]   # optional
@@ -19,10 +20,11 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from dataclasses import fields
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import shapely
 from pydantic import (
@@ -40,16 +42,20 @@ from shapely.geometry import box as rect
 
 from llm_grop.errors import BadInput
 from llm_grop.world.datafile import load_yaml_model
-from llm_grop.world.geometry2d import Box, Pose2D
+from llm_grop.world.geometry2d import Box, Disc, Pose2D
 from llm_grop.world.jsonio import rounded
 from llm_grop.world.robot import Robot
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
+from llm_grop.world.seat import Seat
+from llm_grop.world.table import Table
 
 #: Overlaps shallower than this (metres) are ignored, so that touching shapes and
 #: values rounded to 0.1 mm in JSON still load.
 #: Closest two pinned object starts may be, centre to centre, metres.
 _SOURCE_GAP_M = 0.05
 _TOL_M = 1e-3
+#: How far a round table's two sizes may differ, metres (JSON rounds to 0.1 mm).
+_ROUND_TOL_M = 1e-6
 
 _Name = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]
 _XY = tuple[FiniteFloat, FiniteFloat]
@@ -74,8 +80,16 @@ class WallEntry(_SceneModel):
     yaw: FiniteFloat = 0.0
 
 
-class TableEntry(WallEntry):
+class TableEntry(_SceneModel):
+    """A table: a rectangle ``size: [w, d]``, or ``shape: circle`` with ``size: [d, d]``
+    or ``diameter: d`` (metres)."""
+
     name: _Name
+    center: _XY
+    size: _Size | None = None
+    shape: Literal["rectangle", "circle"] = "rectangle"
+    diameter: PositiveFloat | None = None
+    yaw: FiniteFloat = 0.0
     height: PositiveFloat = 0.75
 
 
@@ -114,6 +128,7 @@ class SceneFile(_SceneModel):
     chairs: list[ChairEntry] | None = None
     chair_band_m: tuple[NonNegativeFloat, NonNegativeFloat] = (0.0, 1.0)
     robot: RobotEntry = Field(default_factory=RobotEntry)
+    diners: list[tuple[FiniteFloat, FiniteFloat, FiniteFloat]] | None = None
 
 
 def parse_scene(text: str, where: str) -> Scene:
@@ -153,8 +168,8 @@ def parse_scene(text: str, where: str) -> Scene:
     size = f"{m.room.width:g} x {m.room.depth:g} m"
     walls = tuple(_box(w) for w in m.walls)
     wall_polys = [_poly(b) for b in walls]
-    tables = tuple(SceneTable(t.name, _box(t), t.height) for t in m.tables)
-    table_polys = [_poly(t.box) for t in tables]
+    tables = tuple(_table(t, f"tables[{k}] ({t.name!r})", fail) for k, t in enumerate(m.tables))
+    table_polys = [_poly(t.footprint) for t in tables]
     for k, poly in enumerate(table_polys):
         path = f"tables[{k}] ({names[k]!r})"
         if not _inside(poly, room):
@@ -192,7 +207,7 @@ def parse_scene(text: str, where: str) -> Scene:
         for j, wall in enumerate(walls):
             if wall.contains(s.x, s.y):
                 raise fail(f"{path}.position", f"inside wall {j + 1}")
-        if not tables[names.index(s.table)].box.contains(s.x, s.y, _TOL_M):
+        if not tables[names.index(s.table)].contains(s.x, s.y, _TOL_M):
             raise fail(f"{path}.position", f"{at} is not on the top of table {s.table!r}")
         for j, other in enumerate(sources[:k]):
             if s.object == other.object:
@@ -211,11 +226,47 @@ def parse_scene(text: str, where: str) -> Scene:
     if reason:
         raise fail("robot.start", reason)
 
-    return Scene(
+    scene = Scene(
         name=m.name or "dining room", width=m.room.width, depth=m.room.depth,
         tables=tables, target=m.target, robot_start=start, walls=walls,
         source_tables=tuple(m.source_tables), sources=sources, chairs=chairs, robot=robot,
-        chair_band_m=(lo, hi), chairs_listed=m.chairs is not None)
+        chair_band_m=(lo, hi), chairs_listed=m.chairs is not None,
+        diners=tuple(Seat(*d) for d in m.diners or ()))
+    try:
+        scene.target_top  # noqa: B018 - a seat inside the target table is refused here
+    except BadInput as exc:
+        raise fail("diners", str(exc).removeprefix("table: ")) from None
+    return scene
+
+
+def set_target_top(scene: Scene, top: Table, *, keep_chairs: bool = True) -> Scene:
+    """``scene`` with its target table's top replaced by ``top`` (``--table``): same
+    centre, yaw and height, ``top``'s size and shape.
+
+    Raises :class:`BadInput` (one line naming ``--table`` and what it hits) when the new
+    top leaves the room or overlaps a wall, another table, the robot's start or, with
+    ``keep_chairs``, one of the scene's chairs.
+    """
+    out = scene.with_target_top(top)
+    target = out.target_table
+    poly = _poly(target.footprint)
+    where = f"--table: a {top.label} as {target.name!r}"
+
+    if not _inside(poly, rect(0.0, 0.0, scene.width, scene.depth)):
+        raise BadInput(f"{where} extends outside the room ({scene.width:g} x {scene.depth:g} m)")
+    for t in out.tables:
+        if t.name != target.name and _overlap(poly, _poly(t.footprint)):
+            raise BadInput(f"{where} overlaps table {t.name!r}")
+    for j, wall in enumerate(out.walls):
+        if _overlap(poly, _poly(wall)):
+            raise BadInput(f"{where} overlaps wall {j + 1}")
+    for c in out.chairs if keep_chairs else ():
+        if _overlap(poly, _poly(c.box)):
+            raise BadInput(f"{where} overlaps {c.name}; sample chairs with --chairs N")
+    start = out.robot_start
+    if _overlap(Point(start.x, start.y).buffer(out.robot.base_radius_m), poly):
+        raise BadInput(f"{where} covers the robot's start ({start.x:g}, {start.y:g})")
+    return out
 
 
 def load_scene(path: str | os.PathLike[str] | None = None) -> Scene:
@@ -255,8 +306,9 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         "name": scene.name,
         "room": {"width": rounded(scene.width), "depth": rounded(scene.depth)},
         "walls": [box(w) for w in scene.walls],
+        # A round table says so; rectangles are written as before.
         "tables": [{"name": t.name} | box(t.box) | {"height": rounded(t.height)}
-                   for t in scene.tables],
+                   | ({"shape": t.shape} if t.is_round else {}) for t in scene.tables],
         "target": scene.target,
         "source_tables": list(scene.source_tables),
         "sources": [{"object": s.object, "table": s.table,
@@ -267,6 +319,8 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     }
     if not (scene.chairs_listed or scene.chairs):
         del out["chairs"]
+    if scene.diners:
+        out["diners"] = [[rounded(v) for v in d.as_list()] for d in scene.diners]
     return out
 
 
@@ -291,9 +345,36 @@ def _box(m: WallEntry) -> Box:
     return Box(m.center[0], m.center[1], m.size[0], m.size[1], m.yaw)
 
 
-def _poly(b: Box) -> Polygon:
+def _table(t: TableEntry, path: str, fail: Callable[[str, str], BadInput]) -> SceneTable:
+    """The table of entry ``t`` (at ``path`` in the file); a round one's size comes from
+    ``size: [d, d]`` or ``diameter: d``. ``fail(field path, reason)`` makes the error."""
+    if t.shape == "rectangle":
+        if t.diameter is not None:
+            raise fail(f"{path}.diameter", "only a round table (shape: circle) has a diameter")
+        if t.size is None:
+            raise fail(f"{path}.size", "Field required")
+        w, d = t.size
+    else:
+        sizes = [] if t.size is None else [t.size]
+        if t.diameter is not None:
+            sizes.append((t.diameter, t.diameter))
+        if not sizes:
+            raise fail(f"{path}.size", "Field required (a round table: [d, d] or diameter: d)")
+        for w, d in sizes:
+            if not math.isclose(w, d, rel_tol=0.0, abs_tol=_ROUND_TOL_M):
+                raise fail(f"{path}.size", f"a round table has one size, its diameter: give "
+                           f"[d, d] or diameter: d, got [{w:g}, {d:g}]")
+        if len(sizes) == 2 and not math.isclose(sizes[0][0], t.diameter or 0.0, rel_tol=0.0,
+                                                abs_tol=_ROUND_TOL_M):
+            raise fail(f"{path}.diameter", f"{t.diameter:g} m disagrees with size "
+                       f"[{sizes[0][0]:g}, {sizes[0][1]:g}]")
+        w, d = sizes[0]
+    return SceneTable(t.name, Box(t.center[0], t.center[1], w, d, t.yaw), t.height, t.shape)
+
+
+def _poly(b: Box | Disc) -> Polygon:
     """``b``'s footprint as a shapely polygon (room frame, metres)."""
-    return Polygon(b.corners())
+    return Polygon(b.outline())
 
 
 def _overlap(a: shapely.Geometry, b: shapely.Geometry) -> bool:
@@ -316,7 +397,7 @@ def _start_blocked(start: Pose2D, radius: float, room: Polygon, walls: tuple[Box
         if _overlap(disc, _poly(wall)):
             return f"{at} collides with wall {j + 1}"
     for t in tables:
-        if _overlap(disc, _poly(t.box)):
+        if _overlap(disc, _poly(t.footprint)):
             return f"{at} collides with table {t.name!r}"
     for c in chairs:
         if _overlap(disc, _poly(c.box)):

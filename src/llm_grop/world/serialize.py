@@ -21,6 +21,7 @@ from llm_grop.world.datafile import validated
 from llm_grop.world.jsonio import rounded
 from llm_grop.world.llmlog import CallRecord, LLMSummary
 from llm_grop.world.relation import Relation
+from llm_grop.world.seat import Seat
 from llm_grop.world.table import Table
 
 D = TypeVar("D", bound=Doc)
@@ -46,7 +47,8 @@ def _relation(rel: Relation, line: bool = False) -> RelationDoc:
 def _object(p: Placement) -> ObjectDoc:
     return ObjectDoc(name=p.name, x=rounded(p.x), y=rounded(p.y), yaw=rounded(p.yaw),
                      shape=p.shape, size=(rounded(p.size[0]), rounded(p.size[1])), on=p.on,
-                     kind=p.kind or p.name, height=rounded(p.height))
+                     kind=p.kind or p.name, height=rounded(p.height),
+                     **({"diner": p.diner} if p.diner is not None else {}))
 
 
 def _call(c: CallRecord) -> LLMCallDoc:
@@ -65,8 +67,10 @@ def arrangement_doc(a: Arrangement, *, llm_log: bool = True) -> ArrangementDoc:
                             **log)
     return ArrangementDoc(
         request=a.request,
-        table=TableDoc(shape="rectangle", size=(rounded(a.table.width),
-                                                rounded(a.table.depth))),
+        table=TableDoc(shape="circle" if a.table.is_round else "rectangle",
+                       size=(rounded(a.table.width), rounded(a.table.depth)),
+                       **({"diners": [tuple(rounded(v) for v in s.as_list())
+                                      for s in a.table.diners]} if a.table.diners else {})),
         objects=[_object(p) for p in a.placements],
         relations=[_relation(r) for r in a.relations],
         **llm,
@@ -91,11 +95,26 @@ def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -
         if o.size is None:
             raise BadInput(f"{where}: objects[{i}] ({o.name!r}).size: missing")
         placements.append(Placement(o.name, o.x, o.y, o.yaw, o.shape or "box", o.size, o.on,
-                                    o.kind or o.name, o.height or 0.0))
+                                    o.kind or o.name, o.height or 0.0, o.diner))
     try:
         relations = tuple(Relation(r.subject, r.relation, r.reference) for r in doc.relations)
     except ValueError as exc:
         raise BadInput(f"{where}: relations: {exc}") from None
     llm = LLMSummary(doc.llm.backend, doc.llm.model) if doc.llm is not None else None
-    return Arrangement(doc.request, Table(*doc.table.size, doc.table.shape),
-                       tuple(placements), relations, llm, tuple(doc.warnings))
+    return Arrangement(doc.request, table_of(doc, where), tuple(placements), relations, llm,
+                       tuple(doc.warnings))
+
+
+def table_of(doc: ArrangementDoc, where: str = "arrangement") -> Table:
+    """The document's table with its diners; :class:`BadInput` for a seat inside the top
+    or an object whose ``diner`` has no seat."""
+    seats = tuple(Seat(*d) for d in doc.table.diners or ())
+    try:
+        table = Table(*doc.table.size, doc.table.shape, seats)
+    except BadInput as exc:
+        raise BadInput(f"{where}: {exc}") from None
+    for i, o in enumerate(doc.objects):
+        if o.diner is not None and o.diner >= len(table.seats):
+            raise BadInput(f"{where}: objects[{i}] ({o.name!r}).diner: {o.diner} but the "
+                           f"table seats {len(table.seats)} diner(s)")
+    return table

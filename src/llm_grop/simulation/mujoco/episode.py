@@ -27,19 +27,19 @@ log = logging.getLogger(__name__)
 def final_placements(w: World, scene: Scene, placements: Sequence[Placement]
                      ) -> tuple[Placement, ...]:
     """Every object resting on the target table, where it is (table frame)."""
-    box = scene.target_table.box
+    table = scene.target_table
     top = w.top_z(scene.target)
     out = []
     for p in placements:
         if p.name == w.held:
             continue
         pose = w.object_pose(p.name)
-        inside = box.contains(pose.x, pose.y)
+        inside = table.contains(pose.x, pose.y)
         if not (inside and top - 0.01 <= pose.z <= top + 0.5):
             continue
         x, y, yaw = scene.room_to_table(pose.x, pose.y, pose.yaw)
-        out.append(Placement(p.name, round(x, 4), round(y, 4), round(yaw, 4), p.shape, p.size,
-                             w.support_of(p.name), p.kind, p.height))
+        out.append(replace(p, x=round(x, 4), y=round(y, 4), yaw=round(yaw, 4),
+                           on=w.support_of(p.name)))
     return tuple(out)
 
 

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -66,8 +67,7 @@ class MujocoSession:
         """One attempt to place ``name`` at ``(x, y, yaw)`` in the table frame (metres,
         radians), on the object ``on`` if that is on the table."""
         p = self.objects[name]
-        return self.episode.place(Placement(name, x, y, yaw, p.shape, p.size, on, p.kind,
-                                            p.height))
+        return self.episode.place(replace(p, x=x, y=y, yaw=yaw, on=on))
 
     def final(self) -> tuple[Placement, ...]:
         """Every object on the target table, where it is (table frame)."""

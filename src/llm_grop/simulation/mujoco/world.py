@@ -129,7 +129,9 @@ class World:
         """Height of the top face of a table (by table name) or a piece of tableware."""
         if name in self.wm.tops:
             g = self.wm.tops[name]
-            return float(self.d.geom_xpos[g][2] + self.m.geom_size[g][2])
+            # A box's half height is its third size, a (round top's) cylinder's its second.
+            half = 1 if self.m.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER else 2
+            return float(self.d.geom_xpos[g][2] + self.m.geom_size[g][half])
         return self.object_pose(name).z + self.wm.objects[name].height
 
     def support_of(self, name: str) -> str | None:

@@ -1,6 +1,7 @@
 """The dining room as a MuJoCo model, built from the scene with MuJoCo's model editor.
 
-The robot comes from ``assets/robot.xml``; floor, walls, tables with legs, chairs with seat,
+The robot comes from ``assets/robot.xml``; floor, walls, tables with legs (a round one: a
+cylinder top on a pedestal), chairs with seat,
 back and legs, and the tableware are added around it. World frame = the scene's room frame
 (metres, radians), z up from the floor. Furniture is fixed to the world; tableware bodies are
 free, each with an inactive weld to the hand that a grasp switches on (see
@@ -20,8 +21,8 @@ from shapely.geometry import Point, Polygon
 
 from llm_grop.errors import BadInput
 from llm_grop.simulation.mujoco.tableware import Tableware, add_body
-from llm_grop.world.geometry2d import Box
-from llm_grop.world.scene import Chair, Scene
+from llm_grop.world.geometry2d import Box, Disc
+from llm_grop.world.scene import Chair, Scene, SceneTable
 
 #: Furniture collision bits (robot.xml): collides with the robot (2) and tableware (4).
 FURNITURE = (1, 2 | 4)
@@ -33,6 +34,9 @@ WALL_HEIGHT_M = 1.0
 SEAT_Z_M, SEAT_T_M, BACK_TOP_M = 0.45, 0.04, 0.90
 #: Thickness of a table top and side of a square leg, metres.
 TOP_T_M, LEG_M = 0.03, 0.05
+#: A round table's pedestal: radius and thickness of its foot, metres (the column's
+#: radius is ``LEG_M``).
+PEDESTAL_FOOT_M, FOOT_T_M = 0.25, 0.03
 #: Geom group of furniture and tableware in renders (robot.xml draws the robot in 2).
 GROUP_WORLD = 0
 
@@ -97,10 +101,11 @@ def check_scene(scene: Scene) -> None:
     """:class:`BadInput` when the scene cannot be built: furniture that interpenetrates or
     leaves the room, or a robot that starts inside something."""
     room = Polygon([(0, 0), (scene.width, 0), (scene.width, scene.depth), (0, scene.depth)])
-    parts = [(f"table {t.name!r}", t.box) for t in scene.tables]
+    parts: list[tuple[str, Box | Disc]] = [(f"table {t.name!r}", t.footprint)
+                                           for t in scene.tables]
     parts += [(f"chair {c.name!r}", c.box) for c in scene.chairs]
     parts += [(f"wall {k}", w) for k, w in enumerate(scene.walls)]
-    polys = [(label, Polygon(b.corners())) for label, b in parts]
+    polys = [(label, Polygon(b.outline())) for label, b in parts]
     for label, poly in polys:
         if not label.startswith("wall") and not room.buffer(1e-6).contains(poly):
             raise BadInput(f"scene {scene.name!r}: {label} reaches outside the room")
@@ -131,7 +136,7 @@ def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.
     world = spec.worldbody
     _room(spec, scene)
     for t in scene.tables:
-        _table(world, t.name, t.box, t.height, _TARGET if t.name == scene.target else _WOOD)
+        _table(world, t, _TARGET if t.name == scene.target else _WOOD)
     centre = scene.target_table.box
     for c in scene.chairs:
         _chair(world, c, (centre.x, centre.y))
@@ -150,6 +155,14 @@ def _box_geom(body: mujoco.MjsBody, name: str, size: Sequence[float], pos: Seque
               yaw: float, rgba: Sequence[float]) -> None:
     body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=list(size), pos=list(pos),
                   quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)], rgba=list(rgba),
+                  contype=FURNITURE[0], conaffinity=FURNITURE[1], group=GROUP_WORLD)
+
+
+def _cylinder_geom(body: mujoco.MjsBody, name: str, radius: float, half_height: float,
+                   z: float, rgba: Sequence[float]) -> None:
+    """An upright furniture cylinder centred ``z`` metres above the body's origin."""
+    body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                  size=[radius, half_height, 0], pos=[0, 0, z], rgba=list(rgba),
                   contype=FURNITURE[0], conaffinity=FURNITURE[1], group=GROUP_WORLD)
 
 
@@ -178,13 +191,24 @@ def _room(spec: mujoco.MjSpec, scene: Scene) -> None:
                   b.yaw, _WALL)
 
 
-def _table(world: mujoco.MjsBody, name: str, box: Box, height: float,
-           rgba: Sequence[float]) -> None:
+def _table(world: mujoco.MjsBody, table: SceneTable, rgba: Sequence[float]) -> None:
+    """A table: its top (a box, or a cylinder for a round one) on four legs, or on one
+    pedestal for a round one."""
+    name, box, height = table.name, table.box, table.height
     body = world.add_body(name=f"table:{name}", pos=[box.x, box.y, 0],
                           quat=[math.cos(box.yaw / 2), 0, 0, math.sin(box.yaw / 2)])
+    leg_h = (height - TOP_T_M) / 2
+    if table.is_round:
+        radius = box.width / 2
+        _cylinder_geom(body, f"top:{name}", radius, TOP_T_M / 2, height - TOP_T_M / 2, rgba)
+        # One pedestal: a column on a foot, both well inside the top, so the base (which
+        # stands outside the top's edge) never meets them.
+        foot = min(PEDESTAL_FOOT_M, 0.8 * radius)
+        _cylinder_geom(body, f"leg:{name}:0", min(LEG_M, foot), leg_h, leg_h, _WOOD)
+        _cylinder_geom(body, f"leg:{name}:1", foot, FOOT_T_M / 2, FOOT_T_M / 2, _WOOD)
+        return
     _box_geom(body, f"top:{name}", (box.width / 2, box.depth / 2, TOP_T_M / 2),
               (0, 0, height - TOP_T_M / 2), 0.0, rgba)
-    leg_h = (height - TOP_T_M) / 2
     for k, (sx, sy) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1))):
         _box_geom(body, f"leg:{name}:{k}", (LEG_M / 2, LEG_M / 2, leg_h),
                   (sx * (box.width / 2 - LEG_M), sy * (box.depth / 2 - LEG_M), leg_h), 0.0,
