@@ -194,3 +194,25 @@ def test_cli_too_many_diners_and_bad_weight_are_one_line_errors(capsys) -> None:
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "8 diners do not fit" in err
     assert main(["run", "--task", "1", "--fidelity-weight", "-1", "-q"]) == 2
+
+
+def test_bench_in_a_scene_that_seats_two_rates_each_setting(tmp_path: Path) -> None:
+    import json
+
+    from llm_grop.cli import main
+    scene = tmp_path / "seated.yaml"
+    scene.write_text(_room_with("diners: [[-0.45, -0.45, 1.5708], [0.45, 0.45, -1.5708]]\n"))
+    prefs = tmp_path / "prefs.yaml"
+    prefs.write_text("preferences:\n" + "".join(
+        f"  - {s}\n" for s in PREFERENCES.preference_pool))
+    out = tmp_path / "bench"
+    assert main(["bench", "--tasks", "1", "--trials", "1", "--methods", "llm-grop,grop",
+                 "--scene", str(scene), "--table", "1.8x0.9", "--llm", "replay",
+                 "--replay", str(NO_CALLS), "--preferences", str(prefs), "--out", str(out),
+                 "--no-images", "-q"]) == 0
+    rows = [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
+    assert len(rows) == 2
+    for row in rows:
+        assert len(row["rating_explanation"]["diners"]) == 2
+        assert row["rating"] == min(d["score"] for d in row["rating_explanation"]["diners"])
+        assert len(row["final"]["table"]["diners"]) == 2

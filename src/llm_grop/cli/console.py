@@ -15,7 +15,8 @@ def print_arrangement(result: ArrangementResult, console: Console) -> None:
     console.print(f"[bold]Request:[/bold] {a.request}")
     size = (f"round, {a.table.width:g} m across" if a.table.is_round
             else f"{a.table.width:g} x {a.table.depth:g} m")
-    console.print(f"[bold]Table:[/bold] {size}")
+    seats = f", {len(a.table.diners)} diners" if len(a.table.diners) > 1 else ""
+    console.print(f"[bold]Table:[/bold] {size}{seats}")
     for k, attempt in enumerate(result.attempts, 1):
         if attempt.conflict:
             lines = "; ".join(r.line or r.sentence() for r in attempt.conflict)

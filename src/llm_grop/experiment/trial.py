@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from llm_grop.api import run
+from llm_grop.arrangement.diners import seat_items
 from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.errors import Infeasible
 from llm_grop.evaluation.rater import rate
@@ -110,6 +111,9 @@ class TrialRunner:
         """The trial's row."""
         task = self.tasks[spec.task]
         llm_log = self.llm() if get_method(spec.method).uses_llm else None
+        # A scene that seats several diners sets the task's objects once for each of them.
+        requested = [i.name for i in seat_items(items_from_names(task.objects, self.catalog),
+                                                self.scene.target_top)]
         episode: dict[str, Any]
         try:
             result = run(task=spec.task, tasks=self.tasks, method=spec.method, scene=self.scene,
@@ -123,7 +127,7 @@ class TrialRunner:
             log.info("task %d trial %d %s: infeasible: %s", spec.task, spec.trial,
                      spec.method, exc)
             final = Arrangement(task.request, self.scene.target_top, ())
-            items = [i.name for i in items_from_names(task.objects, self.catalog)]
+            items = list(requested)
             episode = {"method": spec.method, "task": spec.task, "seed": spec.seed,
                        "request": task.request, "success": False, "execution_time_s": None,
                        "planning_time_s": None, "failures": 0, "unplaced": items,
@@ -136,7 +140,7 @@ class TrialRunner:
             episode = {k: getattr(doc, k) for k in doc.model_fields_set} | {
                 "status": "ok", "retries": sum(s.attempt > 1 for s in result.execution.steps)}
         calls = llm_log.calls if llm_log else []
-        rating = rate(episode["final"], requested=list(task.objects), catalog=self.catalog)
+        rating = rate(episode["final"], requested=requested, catalog=self.catalog)
         extra: dict[str, Any] = {}
         if self.settings.images is not None:
             extra["image"] = self._draw(spec, task, final)
