@@ -216,3 +216,18 @@ def test_bench_in_a_scene_that_seats_two_rates_each_setting(tmp_path: Path) -> N
         assert len(row["rating_explanation"]["diners"]) == 2
         assert row["rating"] == min(d["score"] for d in row["rating_explanation"]["diners"])
         assert len(row["final"]["table"]["diners"]) == 2
+
+
+def test_one_seat_across_the_table_is_that_diner_s_setting() -> None:
+    from llm_grop import run
+    from llm_grop.world.scene_file import parse_scene
+    scene = parse_scene(_room_with("diners: [[0.0, 0.3, -1.5708]]\n"), "room.yaml")
+    result = run(f"set the table with {SETTING}", scene=scene, seed=0, llm="replay",
+                 llm_options=BackendOptions(replay_path=str(NO_CALLS)), catalog=CATALOG,
+                 options=PREFERENCES)
+    p = {o.name: o for o in result.planned.placements}
+    # The diner sits at +y facing -y: their left is +x, and the plate is near their edge.
+    assert p["dinner fork"].x > p["dinner plate"].x > p["dinner knife"].x
+    assert 0.3 - (p["dinner plate"].y + 0.135) == pytest.approx(0.03, abs=GAP_TOLERANCE_M)
+    rating = rate(arrangement_to_dict(result.planned), catalog=CATALOG)
+    assert len(rating.diners) == 1 and rating.score == rating.diners[0].score

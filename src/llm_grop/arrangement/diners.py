@@ -65,9 +65,12 @@ def diner_groups(items: Sequence[Item]) -> list[tuple[Item, ...]]:
 
 
 def seat_items(items: Sequence[Item], table: Table) -> tuple[Item, ...]:
-    """``items`` as every seated diner's setting when ``table`` lists several seats and
-    the request asked for one setting; unchanged otherwise."""
-    if len(table.diners) > 1 and all(it.diner is None for it in items):
+    """``items`` as every seated diner's setting when ``table`` lists its seats and the
+    request asked for one setting (one listed seat: that diner's, wherever it is);
+    unchanged otherwise."""
+    if table.diners and all(it.diner is None for it in items):
+        if len(table.diners) == 1:
+            return tuple(replace(it, diner=0) for it in items)
         return for_diners(items, len(table.diners))
     return tuple(items)
 

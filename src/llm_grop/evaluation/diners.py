@@ -21,8 +21,9 @@ from llm_grop.world.serialize import table_of
 
 
 def several_diners(doc: ArrangementDoc) -> bool:
-    """Whether ``doc`` seats more than one diner (each setting is then rated apart)."""
-    return len(doc.table.diners or ()) > 1
+    """Whether ``doc`` lists its diners' seats (each setting is then rated apart, in its
+    diner's frame, even a single diner seated elsewhere than the -y edge)."""
+    return bool(doc.table.diners)
 
 
 def per_diner_kinds(kinds: Sequence[str] | None, diners: int,

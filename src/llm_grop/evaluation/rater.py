@@ -178,6 +178,8 @@ def _rate_diners(doc: ArrangementDoc, kinds: tuple[str, ...] | None,
     checks = tuple(replace(c, detail=f"diner {k}: {c.detail}")
                    for k, r in enumerate(ratings) for c in r.checks)
     each = ", ".join(str(r.score) for r in ratings)
+    if len(ratings) == 1:
+        return Rating(score, checks, f"diner 0: {ratings[0].summary}", tuple(ratings))
     summary = (f"{score}/5: lowest of {len(ratings)} settings (diner {worst}); per diner "
                f"{each}; diner {worst}: {ratings[worst].summary}")
     return Rating(score, checks, summary, tuple(ratings))
