@@ -12,9 +12,10 @@ stage                  what it seeds                                          pa
 ``llm.relations``      the Template 1 call of each attempt                    attempt
 ``llm.followup``       the follow-up call for a left-out object               attempt, k
 ``llm.distance``       the Template 2 call of the k-th relation                k
-``llm.edge``           the call asking the origin object's distance from the
-                       diner's edge of the table                              diner
-``sampler``            the LLM-guided Gaussian rejection sampler (M configs)
+``llm.edge``           the call asking the origin object's distance from the   0
+                       diner's edge of the table
+``sampler``            the LLM-guided Gaussian rejection sampler (M configs;   diner
+                       per diner when the table seats several)
 ``random_arrangement`` the baselines' random collision-free arrangement
 ``chairs``             the chairs sampled near the target table
 ``scene``              where each requested object starts
