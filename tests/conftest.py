@@ -50,6 +50,9 @@ class ChatServer:
     #: Seconds to wait before answering, to provoke client timeouts.
     delay_s: float = 0.0
     reply: Callable[[dict[str, Any]], str] = default_reply
+    #: If set, a request asking for structured output (``response_format``) gets 400, as
+    #: from a server without it.
+    refuse_response_format: bool = False
     requests: list[dict[str, Any]] = field(default_factory=list)
     headers: list[dict[str, str]] = field(default_factory=list)
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -64,6 +67,8 @@ class ChatServer:
             raw = self.raw.popleft() if self.raw else None
         if raw is not None:
             return 200, raw
+        if self.refuse_response_format and "response_format" in body:
+            return 400, _error(400, "response_format is not supported")
         if planned is not None and planned != 200:
             return planned, _error(planned, f"planned failure {planned}")
         if self.api_key is not None and headers.get("authorization") != f"Bearer {self.api_key}":

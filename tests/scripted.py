@@ -31,12 +31,15 @@ PAPER_CONSISTENT = (
 
 
 def scripted(answers: Sequence[str], distance: str = "About 3 centimeters.",
-             followup: str = "") -> Callable[[dict[str, Any]], str]:
-    """A reply function: Template 1 prompts get ``answers`` in turn (the last repeats)."""
+             followup: str = "", items: str = "none") -> Callable[[dict[str, Any]], str]:
+    """A reply function: Template 1 prompts get ``answers`` in turn (the last repeats);
+    the question which objects a request asks for gets ``items``."""
     state = {"n": 0}
 
     def reply(body: dict[str, Any]) -> str:
         prompt = body["messages"][-1]["content"]
+        if "ask the robot to put on the table" in prompt:
+            return items
         if "how many centimeters" in prompt.lower():
             return distance
         if "where should" in prompt.lower():

@@ -33,7 +33,7 @@ def test_arrange_writes_contract_json_and_png(chat_server, tmp_path: Path, capsy
     for o in data["objects"]:
         assert set(o) >= {"name", "x", "y", "yaw", "shape", "size", "on"}
     assert {"subject": "dinner fork", "relation": "to the left of",
-            "reference": "dinner plate"} in data["relations"]
+            "reference": "dinner plate", "source": "llm"} in data["relations"]
     # Template 1, two Template 2 questions and the plate's distance from the diner's edge.
     assert data["llm"]["backend"] == "openai" and data["llm"]["calls"] == 4
     assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -97,11 +97,17 @@ def test_garbage_llm_fails_after_attempts(chat_server, capsys, monkeypatch) -> N
     assert "no usable spatial relation in 2 attempt" in _one_line_error(capsys)
 
 
-def test_table_too_small_exit_1(chat_server, capsys, monkeypatch) -> None:
+def test_table_too_small_exit_1(chat_server, tmp_path: Path, capsys, monkeypatch) -> None:
+    # The smallest table --table accepts (30 cm a side) still cannot hold a 45 cm tray.
     monkeypatch.setenv("OPENAI_API_KEY", "test")
-    chat_server.reply = scripted([TASK1_GOOD])
-    assert main(["arrange", REQUEST, *_openai(chat_server), "--table", "0.2x0.2"]) == 1
-    assert "too small" in _one_line_error(capsys)
+    mine = tmp_path / "mine.yaml"
+    mine.write_text("objects:\n  - name: serving tray\n    shape: box\n"
+                    "    size: [0.45, 0.35]\n    height: 0.02\n")
+    chat_server.reply = scripted(["Place the serving tray in the center of the table.\n"
+                                  "Place the dinner fork to the left of the serving tray."])
+    assert main(["arrange", "a serving tray and a dinner fork", *_openai(chat_server),
+                 "--catalog", str(mine), "--table", "30x30cm"]) == 1
+    assert "0.3 x 0.3 m table is too small for serving tray" in _one_line_error(capsys)
 
 
 def test_user_catalog_object_can_be_arranged(chat_server, tmp_path: Path, monkeypatch) -> None:
@@ -141,3 +147,199 @@ def test_embedded_model_end_to_end(tmp_path: Path) -> None:
 
     assert violations(Configuration(arr.placements), arr.relations, arr.table) == []
     assert out_png.stat().st_size > 10_000
+
+
+# -- --table: units and plausible sizes -----------------------------------------------------
+
+RECORDING = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "embedded_calls.jsonl"
+REPLAY = ["--llm", "replay", "--replay", str(RECORDING)]
+
+
+def test_a_table_far_too_large_is_bad_input_not_a_memory_error(capsys) -> None:
+    # It used to reach the layout, which tried a billion push steps: MemoryError, exit 3.
+    assert main(["arrange", "--task", "1", "--table", "1000000000x1000000000", *REPLAY]) == 2
+    assert _one_line_error(capsys) == ("llm-grop: error: --table: 1e+09 x 1e+09 m is not a "
+                                       "dining table (each side between 0.3 and 10 m)")
+
+
+def test_a_table_in_centimetres(chat_server, tmp_path: Path, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD])
+    out = tmp_path / "t.json"
+    assert main(["arrange", REQUEST, *_openai(chat_server), "--table", "120x80",
+                 "--json", str(out)]) == 2
+    assert _one_line_error(capsys) == (
+        "llm-grop: error: --table: 120 x 80 m is not a dining table (each side between 0.3 "
+        "and 10 m); did you mean 120x80cm?")
+    assert not chat_server.requests and not out.exists()
+    assert main(["arrange", REQUEST, *_openai(chat_server), "--table", "120x80cm",
+                 "--json", str(out), "-q"]) == 0
+    assert json.loads(out.read_text())["table"] == {"shape": "rectangle", "size": [1.2, 0.8]}
+
+
+def test_every_command_has_the_same_table_flag() -> None:
+    from llm_grop.cli import cli
+
+    flags = [next(p for p in cli.commands[c].params if p.name == "table")
+             for c in ("arrange", "run", "bench")]
+    for flag in flags:
+        assert flag.opts == ["--table"] and flag.metavar == "WxD|round:D"
+        assert flag.help == flags[0].help and flag.callback is flags[0].callback
+    assert "120x80cm" in (flags[0].help or "") and "round:120cm" in (flags[0].help or "")
+
+
+# -- outputs: checked before the LLM is paid for, written all or none -----------------------
+
+@pytest.mark.parametrize(("flags", "needle"), [
+    (["--json", "{tmp}/missing/t.json"], "--json {tmp}/missing/t.json: directory "
+                                         "{tmp}/missing does not exist"),
+    (["--json", "{tmp}"], "is a directory"),
+    (["--json", "{tmp}/t.json", "--image", "{tmp}/t.xyz"],
+     "--image {tmp}/t.xyz: only PNG pictures are made; use a name ending in .png"),
+    (["--json", "{tmp}/t.json", "--image", "{tmp}/missing/t.png"],
+     "--image {tmp}/missing/t.png: directory {tmp}/missing does not exist"),
+    (["--json", "{tmp}/t.json", "--record", "{tmp}/missing/calls.jsonl"],
+     "--record {tmp}/missing/calls.jsonl: directory {tmp}/missing does not exist"),
+    (["--json", "{tmp}/t.json", "--image", "{tmp}/" + "n" * 300 + ".png"], "File name too long"),
+])
+def test_a_bad_output_is_refused_before_any_llm_call(chat_server, tmp_path: Path, capsys,
+                                                     monkeypatch, flags: list[str],
+                                                     needle: str) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD])
+    args = [f.format(tmp=tmp_path) for f in flags]
+    assert main(["arrange", REQUEST, *_openai(chat_server), *args]) == 2
+    assert needle.format(tmp=tmp_path) in _one_line_error(capsys)
+    assert chat_server.requests == []  # nothing was paid for
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # and nothing was written
+
+
+def test_a_bad_image_keeps_the_users_json(chat_server, tmp_path: Path, capsys,
+                                          monkeypatch) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD])
+    mine = tmp_path / "t.json"
+    mine.write_text("my own notes\n")
+    assert main(["arrange", REQUEST, *_openai(chat_server), "--json", str(mine),
+                 "--image", str(tmp_path / "t.jpg")]) == 2
+    assert "--image" in _one_line_error(capsys)
+    assert mine.read_text() == "my own notes\n" and not chat_server.requests
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.json"]
+
+
+def test_outputs_with_long_names_are_written(tmp_path: Path) -> None:
+    # Temporary files beside them keep short names, whatever the output's.
+    name = "n" * 240
+    out_json, out_png = tmp_path / f"{name}.json", tmp_path / f"{name}.png"
+    assert main(["arrange", "--task", "1", *REPLAY, "--json", str(out_json),
+                 "--image", str(out_png), "-q"]) == 0
+    assert json.loads(out_json.read_text())["objects"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [out_json.name, out_png.name]
+
+
+def test_staged_outputs_are_written_all_or_none(tmp_path: Path) -> None:
+    from llm_grop.cli.options import StagedOutputs
+    from llm_grop.errors import BadInput
+    from llm_grop.world.jsonio import write_json
+
+    first, second = tmp_path / "a.json", tmp_path / "b.json"
+    first.write_text("old\n")
+    with pytest.raises(BadInput, match=r"^--image: .*b\.json: cannot write"), \
+            StagedOutputs() as outputs:
+        outputs.write("json", first, lambda p: write_json(p, {"new": True}))
+        # A real writer that fails: its directory does not exist.
+        outputs.write("image", second,
+                      lambda p: write_json(tmp_path / "gone" / second.name, {}))
+        outputs.commit()
+    assert first.read_text() == "old\n"  # the user's file is kept, never half replaced
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json"]  # no temporary file left
+    with StagedOutputs() as outputs:
+        outputs.write("json", first, lambda p: write_json(p, {"new": True}))
+        outputs.write("json", second, lambda p: write_json(p, {"two": 2}))
+        outputs.commit()
+    assert json.loads(first.read_text()) == {"new": True}
+    assert json.loads(second.read_text()) == {"two": 2}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "b.json"]
+
+
+def test_write_json_is_atomic_and_keeps_the_files_mode(tmp_path: Path) -> None:
+    from llm_grop.errors import BadInput
+    from llm_grop.world.jsonio import write_json
+
+    path = tmp_path / "t.json"
+    path.write_text("old\n")
+    path.chmod(0o640)
+    (tmp_path / ".t.json.tmp").write_text("a user's file with write_json's old temp name\n")
+    with pytest.raises(TypeError):
+        write_json(path, {"x": object()})  # cannot be JSON: nothing is touched
+    write_json(path, {"x": 1})
+    assert json.loads(path.read_text()) == {"x": 1} and path.stat().st_mode & 0o777 == 0o640
+    with pytest.raises(BadInput, match="cannot write"):
+        write_json(tmp_path, {"x": 1})  # a directory
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".t.json.tmp", "t.json"]
+
+
+# -- warnings -------------------------------------------------------------------------------
+
+def test_arrange_prints_warnings_on_stderr_unless_quiet(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "t.json"
+    assert main(["arrange", "--task", "1", *REPLAY, "--json", str(out)]) == 0
+    printed = capsys.readouterr()
+    warnings = json.loads(out.read_text())["warnings"]
+    assert warnings and "warning:" not in printed.out
+    assert [line for line in printed.err.splitlines() if line.startswith("warning: ")] == \
+        [f"warning: {w}" for w in warnings]
+    assert main(["arrange", "--task", "1", *REPLAY, "-q"]) == 0
+    printed = capsys.readouterr()
+    assert printed.out == "" and "warning" not in printed.err
+
+
+def test_a_long_warning_is_one_short_line() -> None:
+    from llm_grop.cli.console import WARNING_CHARS, one_line
+
+    text = "the other relations keep\nthe dinner fork " + "far away " * 60
+    line = one_line(text)
+    assert "\n" not in line and len(line) == WARNING_CHARS and line.endswith("…")
+    assert one_line("short  and\nplain") == "short and plain"
+
+
+def test_a_request_in_brackets_is_printed_as_written(chat_server, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD])
+    request = "[/the] a dinner plate, a dinner fork and a dinner knife [the]"
+    assert main(["arrange", request, *_openai(chat_server)]) == 0
+    assert f"Request: {request}" in capsys.readouterr().out
+
+
+def test_objects_the_matcher_cannot_read_are_read_by_the_llm(chat_server, tmp_path: Path,
+                                                             capsys, monkeypatch) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD], items="1 dinner fork\n1 dinner knife")
+    out = tmp_path / "t.json"
+    assert main(["arrange", "a dinner plate and cutlery", *_openai(chat_server),
+                 "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["request_read_by"] == "llm"
+    assert [o["kind"] for o in data["objects"]] == ["dinner plate", "dinner fork",
+                                                    "dinner knife"]
+    err = capsys.readouterr().err
+    assert "warning: the LLM read 'cutlery' as: 1 dinner fork, 1 dinner knife" in err
+
+
+@pytest.mark.parametrize("request_text", [
+    "set the table with happiness", "set the table with ² dinner plates and ①",
+    "стол с тарелкой", "x" * 5000])
+def test_requests_nothing_can_read_are_one_line_errors(request_text: str, capsys) -> None:
+    code = main(["arrange", request_text, "--llm", "replay", "--replay",
+                 str(Path(__file__).parent / "arrangement" / "no_calls.jsonl")])
+    assert code == 2
+    assert _one_line_error(capsys).startswith("llm-grop: error: request:")
+
+
+def test_a_request_that_is_not_utf8_is_one_line(tmp_path: Path) -> None:
+    done = subprocess.run([sys.executable, "-m", "llm_grop", "arrange", b"a plate \xff",
+                           "--llm", "replay", "--replay",
+                           str(Path(__file__).parent / "arrangement" / "no_calls.jsonl")],
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "not UTF-8 text" in done.stderr

@@ -1,4 +1,5 @@
-"""``llm-grop run``: the run JSON, the picture, the summary and bad input."""
+"""``llm-grop run``: the run JSON, the picture, the summary, warnings and bad input; and
+``llm-grop bench``'s output directory and warnings."""
 
 from __future__ import annotations
 
@@ -107,3 +108,90 @@ def test_object_out_of_every_reach(tmp_path: Path, capsys) -> None:
 def test_bad_flags(capsys, args: list[str], needle: str) -> None:
     assert main(args) == 2
     assert needle in _one_line_error(capsys)
+
+
+# -- warnings and outputs (run and bench) ---------------------------------------------------
+
+RECORDING = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "embedded_calls.jsonl"
+REPLAY = ["--llm", "replay", "--replay", str(RECORDING)]
+
+
+def test_run_prints_the_planned_warnings_on_stderr_unless_quiet(tmp_path: Path,
+                                                                capsys) -> None:
+    out = tmp_path / "run.json"
+    assert main(["run", "--task", "1", *REPLAY, "--json", str(out)]) == 0
+    printed = capsys.readouterr()
+    warnings = json.loads(out.read_text())["planned"]["warnings"]
+    assert warnings and "warning:" not in printed.out
+    assert [line for line in printed.err.splitlines() if line.startswith("warning: ")] == \
+        [f"warning: {w}" for w in warnings]
+    assert main(["run", "--task", "1", *REPLAY, "-q"]) == 0
+    printed = capsys.readouterr()
+    assert printed.out == "" and "warning" not in printed.err
+
+
+@pytest.mark.parametrize(("flags", "needle"), [
+    (["--json", "{tmp}/run.json", "--image", "{tmp}/run.xyz"],
+     "--image {tmp}/run.xyz: only PNG pictures are made; use a name ending in .png"),
+    (["--json", "{tmp}/run.json", "--table-image", "{tmp}/table.jpg"],
+     "--table-image {tmp}/table.jpg: only PNG pictures are made"),
+    (["--json", "{tmp}/run.json", "--video", "{tmp}/episode.avi"],
+     "--video {tmp}/episode.avi: the video must be an .mp4 file"),
+    (["--json", "{tmp}/run.json", "--record", "{tmp}/no/calls.jsonl"],
+     "--record {tmp}/no/calls.jsonl: directory {tmp}/no does not exist"),
+])
+def test_run_refuses_a_bad_output_before_any_llm_call(chat_server, tmp_path: Path, capsys,
+                                                      monkeypatch, flags: list[str],
+                                                      needle: str) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD])
+    args = [f.format(tmp=tmp_path) for f in flags]
+    assert main(["run", "--task", "1", *_openai(chat_server), *args]) == 2
+    assert needle.format(tmp=tmp_path) in _one_line_error(capsys)
+    assert chat_server.requests == []
+    assert list(tmp_path.iterdir()) == []  # the JSON was not written either
+
+
+def test_run_in_centimetres_and_a_hint_for_metres(tmp_path: Path, capsys) -> None:
+    assert main(["run", "--task", "1", *REPLAY, "--table", "round:120", "-q"]) == 2
+    assert one_line_error_text(capsys).endswith("did you mean round:120cm?")
+    out = tmp_path / "run.json"
+    assert main(["run", "--task", "1", *REPLAY, "--table", "round:120cm", "-q",
+                 "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["final"]["table"] == {"shape": "circle",
+                                                             "size": [1.2, 1.2]}
+
+
+def one_line_error_text(capsys) -> str:  # type: ignore[no-untyped-def]
+    """The one error line, without its ``llm-grop: error:`` prefix."""
+    return _one_line_error(capsys).removeprefix("llm-grop: error: ")
+
+
+@pytest.mark.parametrize(("out", "needle"), [
+    ("{tmp}/file", "'{tmp}/file' is a file"),  # click's own check
+    ("{tmp}/file/bench", "--out {tmp}/file/bench: {tmp}/file is a file, so the directory "
+                         "cannot be made"),
+])
+def test_bench_refuses_a_bad_out_before_any_llm_call(chat_server, tmp_path: Path, capsys,
+                                                     monkeypatch, out: str,
+                                                     needle: str) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD])
+    (tmp_path / "file").write_text("mine\n")
+    assert main(["bench", "--tasks", "1", "--trials", "1", "--methods", "llm-grop",
+                 *_openai(chat_server), "--out", out.format(tmp=tmp_path)]) == 2
+    assert needle.format(tmp=tmp_path) in _one_line_error(capsys)
+    assert chat_server.requests == []
+    assert (tmp_path / "file").read_text() == "mine\n"
+
+
+def test_bench_prints_each_trials_warnings(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "bench"
+    assert main(["bench", "--tasks", "1", "--trials", "1", "--methods", "llm-grop", *REPLAY,
+                 "--out", str(out), "--no-images"]) == 0
+    err = capsys.readouterr().err
+    row = json.loads((out / "trials.jsonl").read_text().splitlines()[0])
+    warnings = row["planned"]["warnings"]
+    assert warnings
+    for w in warnings:
+        assert f"warning: task 1 trial 0 llm-grop: {w}" in err.splitlines()

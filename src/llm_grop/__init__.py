@@ -20,7 +20,14 @@ from importlib import metadata
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from llm_grop.api import arrange, available_methods, available_simulators, make_llm, run
+    from llm_grop.api import (
+        arrange,
+        available_methods,
+        available_simulators,
+        make_llm,
+        run,
+        understand,
+    )
     from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions
     from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError
     from llm_grop.evaluation.rater import Rating, rate
@@ -36,6 +43,7 @@ if TYPE_CHECKING:
     from llm_grop.world.jsonio import write_json
     from llm_grop.world.plan import RunResult
     from llm_grop.world.relation import Relation
+    from llm_grop.world.request import Request
     from llm_grop.world.run_json import run_to_dict
     from llm_grop.world.scene import Scene
     from llm_grop.world.scene_file import load_scene
@@ -49,6 +57,8 @@ _EXPORTS: dict[str, str] = {
     "available_simulators": "llm_grop.api",
     "make_llm": "llm_grop.api",
     "run": "llm_grop.api",
+    "understand": "llm_grop.api",
+    "Request": "llm_grop.world.request",
     "ArrangeOptions": "llm_grop.arrangement.pipeline",
     "ArrangementResult": "llm_grop.arrangement.pipeline",
     "BadInput": "llm_grop.errors",
@@ -103,6 +113,7 @@ __all__ = [
     "Placement",
     "Rating",
     "Relation",
+    "Request",
     "RunResult",
     "SamplingParams",
     "Scene",
@@ -122,6 +133,7 @@ __all__ = [
     "register_simulator",
     "run",
     "run_to_dict",
+    "understand",
     "write_json",
 ]
 

@@ -8,16 +8,17 @@ from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from llm_grop.arrangement import understanding
 from llm_grop.arrangement.diners import seat_items, seat_table
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
 from llm_grop.errors import BadInput
-from llm_grop.llm.base import LLM, BackendOptions, CallLog
+from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
 from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import available_methods, get_method
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR, available_simulators
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.request import items_from_names, parse_request
+from llm_grop.world.request import Request, items_from_names
 from llm_grop.world.scene import Scene
 from llm_grop.world.table import Table
 from llm_grop.world.tasks import Task, get_task, load_tasks
@@ -27,8 +28,8 @@ if TYPE_CHECKING:
     from llm_grop.simulation.base import Simulator
     from llm_grop.world.plan import RunResult
 
-__all__ = ["arrange", "available_methods", "available_simulators", "make_llm", "resolve_items",
-           "run"]
+__all__ = ["arrange", "available_methods", "available_simulators", "make_llm",
+           "resolve_items", "run", "understand"]
 
 
 def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
@@ -40,16 +41,40 @@ def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
 
 def resolve_items(request: str | None, task: int | None, catalog: Catalog,
                   tasks: Mapping[int, Task] | None = None) -> tuple[str, tuple[Item, ...]]:
-    """The request's text and its items, from ``request`` or ``task``: an id of ``tasks``
-    (default: the paper's Table I)."""
+    """The request's text and its items, from ``request`` (read by the catalog matcher
+    alone) or ``task``: an id of ``tasks`` (default: the paper's Table I)."""
+    reading = understand(request, task=task, catalog=catalog, tasks=tasks, llm=None)
+    return reading.text, reading.items
+
+
+def understand(request: str | None = None, *, task: int | None = None,
+         catalog: Catalog | None = None, tasks: Mapping[int, Task] | None = None,
+         llm: str | LLM | CallLog | Callable[[], CallLog] | None = "embedded",
+         llm_options: BackendOptions | None = None, seed: int = 0,
+         params: SamplingParams | None = None,
+         on_event: Callable[[str], None] | None = None) -> Request:
+    """What ``request`` (or the paper's Table I ``task``, an id of ``tasks``) asks for: its
+    items, the relations it states, and how they were read.
+
+    The catalog matcher reads what it can; ``llm`` is asked about each chunk it cannot
+    account for (:mod:`llm_grop.arrangement.understanding`), and made only then;
+    ``llm=None`` refuses such a chunk as an unknown object. ``seed`` fixes those calls'
+    seeds.
+    """
+    catalog = catalog or Catalog.load()
     if task is not None:
         t = get_task(task, tasks if tasks is not None else load_tasks())
-        return request or t.request, tuple(items_from_names(t.objects, catalog,
-                                                            where=f"task {task}: objects"))
-    if request is not None:
-        parsed = parse_request(request, catalog)
-        return parsed.text, tuple(parsed.items)
-    raise BadInput("request: give a request or a task number")
+        return Request(request or t.request, tuple(items_from_names(
+            t.objects, catalog, where=f"task {task}: objects")))
+    if request is None:
+        raise BadInput("request: give a request or a task number")
+    log: CallLog | Callable[[], CallLog] | None
+    if llm is None or isinstance(llm, CallLog) or callable(llm) and not isinstance(llm, LLM):
+        log = llm
+    else:
+        backend = llm
+        log = lambda: make_llm(backend, llm_options)  # noqa: E731
+    return understanding.understand(request, catalog, log, seed, params, on_event)
 
 
 def arrange(request: str | None = None, *, task: int | None = None,
@@ -66,11 +91,13 @@ def arrange(request: str | None = None, *, task: int | None = None,
     LLM call to a JSONL file that ``llm="replay"`` can read back.
     """
     catalog = catalog or Catalog.load(catalog_files)
-    text, items = resolve_items(request, task, catalog)
-    items = seat_items(items, table or Table())
-    top = seat_table(table or Table(), items)
+    options = options or ArrangeOptions()
     log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
-    return arrange_items(text, items, log, catalog, top, seed, options, on_event)
+    reading = understand(request, task=task, catalog=catalog, llm=log, seed=seed,
+                   params=options.params, on_event=on_event)
+    items = seat_items(reading.items, table or Table())
+    top = seat_table(table or Table(), items)
+    return arrange_items(reading, items, log, catalog, top, seed, options, on_event)
 
 
 def run(request: str | None = None, *, task: int | None = None, method: str = "llm-grop",
@@ -107,7 +134,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     from llm_grop.world.scene_file import load_scene, set_target_top
 
     catalog = catalog or Catalog.load(catalog_files)
-    text, items = resolve_items(request, task, catalog, tasks)
+    options = options or ArrangeOptions()
     chosen = get_method(method)
     sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
     feasibility_profile(feasibility)  # an unknown profile is reported before any work
@@ -122,16 +149,22 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
                            f"did you mean {', '.join(map(repr, catalog.suggest(kind))) or '?'}")
     if chairs is None and not (base.chairs or base.chairs_listed):
         chairs = 1
-    items = seat_items(items, base.target_top)  # a scene with seats: one setting each
+    made: list[CallLog] = [llm] if isinstance(llm, CallLog) else []
+
+    def log() -> CallLog:
+        if not made:
+            made.append(make_llm(llm, llm_options, record))  # type: ignore[arg-type]
+        return made[0]
+
+    reading = understand(request, task=task, catalog=catalog, tasks=tasks, llm=log, seed=seed,
+                   params=options.params, on_event=on_event)
+    items = seat_items(reading.items, base.target_top)  # a scene with seats: one setting each
     top = seat_table(base.target_top, items)  # too many diners: reported before any work
     check = getattr(sim, "check", None)
     if check is not None:
         check(base, items)
     episode = prepare_episode(base, items, seed, chairs=chairs)
-    log = None
-    if chosen.uses_llm:
-        log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
-    inp = EpisodeInput(text, items, top, seed, catalog, log,
-                       options or ArrangeOptions(), on_event)
+    inp = EpisodeInput(reading.text, items, top, seed, catalog,
+                       log() if chosen.uses_llm else None, options, on_event, reading)
     return run_episode(chosen, inp, episode, task=task, simulator=sim, planner=planner,
                        model=feasibility)

@@ -14,6 +14,8 @@ stage                  what it seeds                                          pa
 ``llm.distance``       the Template 2 call of the k-th relation                k
 ``llm.edge``           the call asking the origin object's distance from the   0
                        diner's edge of the table
+``llm.items``          the call asking which catalog objects the k-th chunk    k
+                       of a request the catalog matcher cannot read asks for
 ``sampler``            the LLM-guided Gaussian rejection sampler (M configs;   diner
                        per diner when the table seats several)
 ``random_arrangement`` the baselines' random collision-free arrangement
@@ -41,6 +43,7 @@ STAGES: dict[str, int] = {
     "llm.followup": 2,
     "llm.distance": 3,
     "llm.edge": 4,
+    "llm.items": 5,
     "sampler": 10,
     "random_arrangement": 11,
     "chairs": 12,

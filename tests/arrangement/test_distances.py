@@ -126,3 +126,44 @@ def test_grammar_compiles_and_its_answers_parse() -> None:
     assert "About " in grammar and "centimeters." in grammar
     for answer in ("About 5 centimeters.", "5-7 centimeters.", "12 to 15 centimeters."):
         assert parse_distance_cm(answer) is not None
+
+
+@pytest.mark.parametrize(("text", "cm"), [
+    ("1,000 mm", 100.0),  # a thousands group, not "000 mm"
+    ("1,500 millimeters apart", 150.0),
+    ("1e3 mm", 100.0),
+    ("1E1 cm", 10.0),
+    ("2e-1 m", 20.0),
+    ("5\u202fcm", 5.0),  # narrow no-break space
+    ("5\u2009cm", 5.0),  # thin space
+    ("5\u00a0cm", 5.0),  # no-break space
+    ("１０ cm", 10.0),  # fullwidth digits
+    ("１０ ｃｍ", 10.0),
+    ("5\u20137 cm", 6.0),  # en dash as a range's dash
+    ("5\u22127 cm", 6.0),  # a minus sign between two numbers is a range's dash too
+    ("2¼ cm", 2.25),
+    ("¾ inch", 1.905),
+    ("5 cm²", 5.0),  # the superscript is no number
+    ("① Place it 4 cm away", 4.0),  # nor is the circled digit
+    ("2″", 5.08),  # NFKC makes the double prime two primes
+])
+def test_unicode_and_number_forms(text: str, cm: float) -> None:
+    assert parse_distance_cm(text) == pytest.approx(cm)
+
+
+@pytest.mark.parametrize("text", [
+    "1,000 cm",  # read as 1000 cm, then refused as above MAX_GAP_CM
+    "1e3 cm",
+    "1e999 cm",  # overflows to infinity: refused, no exception
+    "\u22125 cm",  # Unicode minus: negative
+    "\u20135 cm",  # en dash as a minus
+    "\u20105 cm",  # Unicode hyphen
+    "\uff0d5 cm",  # fullwidth hyphen-minus (NFKC)
+    "² cm",
+    "①",
+    "⅓ cm",  # NFKC would read "1⁄3" as 3
+    "\u0663 cm",  # Arabic-Indic three: only ASCII digits are read
+])
+def test_unicode_and_number_forms_that_give_no_distance(text: str) -> None:
+    assert parse_distance_cm(text) is None
+    assert parse_distance_m(text) == (DEFAULT_GAP_CM / 100, True)

@@ -7,14 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from llm_grop.arrangement.geometry import (
+from llm_grop.arrangement.geometry import DEFAULT_GAP_M, choose_origin, guided_layout
+from llm_grop.arrangement.layout import (
     ACROSS_SIGMA_M,
-    DEFAULT_GAP_M,
     FREE_SIGMA_M,
     GAP_SIGMA_M,
     STACK_SIGMA_M,
-    choose_origin,
-    guided_layout,
 )
 from llm_grop.arrangement.predicates import (
     Footprint,

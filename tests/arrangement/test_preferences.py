@@ -42,7 +42,7 @@ def test_a_preference_overrides_the_llm_on_its_pair(chat_server) -> None:
     assert ("dinner fork", "to the left of", "dinner plate") in rels
     assert ("dinner fork", "to the right of", "dinner plate") not in rels
     assert ("dinner knife", "to the left of", "dinner plate") in rels  # the LLM's, kept
-    assert any("overridden by a preference" in w for w in result.arrangement.warnings)
+    assert any("overridden by a stated relation" in w for w in result.arrangement.warnings)
     for config in result.configurations:
         assert not violations(config, result.arrangement.relations, result.arrangement.table)
 
@@ -87,7 +87,7 @@ def test_cli_preferences_file(chat_server, tmp_path: Path, capsys) -> None:
     prefs.write_text("preferences: the fork\n")
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert "prefs.yaml: preferences: expected a list of sentences" in err
+    assert "prefs.yaml: preferences: Input should be a valid list" in err
 
 
 def test_a_stated_distance_replaces_template_2(chat_server) -> None:

@@ -381,3 +381,32 @@ def test_decorated_template_lines_read_back_exactly(
     parsed = _parse("Here is my answer:\n" + "\n".join(lines), TABLEWARE)
     assert [r.key() for r in parsed.relations] == rels
     assert parsed.ignored == ()
+
+
+def test_long_ignored_lines_are_shortened() -> None:
+    line = "Place the fork next to the plate, " + "and so on " * 10_000
+    parsed = _parse(line + "\nPlace the knife to the right of the plate.")
+    (ignored,) = parsed.ignored
+    assert len(ignored) <= 120 and ignored.endswith("…")
+    assert ignored.startswith("Place the fork next to the plate, and so on")
+    assert [r.key() for r in parsed.relations] == [KNIFE_RIGHT]
+
+
+def test_ignored_lines_are_capped_with_a_count() -> None:
+    lines = [f"{k}. Place the fork next to the plate ({k})." for k in range(1, 31)]
+    parsed = _parse("\n".join(lines + lines))  # repeats are listed once, as before
+    assert parsed.ignored == (*(f"Place the fork next to the plate ({k})." for k in range(1, 21)),
+                              "… and 10 more lines")
+
+
+def test_a_long_chain_of_objects_reads_as_before() -> None:
+    # "A and B and C ..." without a phrase, and one long line of many relations: both used
+    # to take quadratic time; the result is unchanged.
+    chain = " and ".join(["the fork", "the knife"] * 2_000) + "."
+    assert _parse(chain).relations == ()
+    unit = "Place the fork to the left of the plate and the knife to the right. "
+    parsed = _parse(unit * 2_000)
+    assert [r.key() for r in parsed.relations] == [FORK_LEFT, KNIFE_RIGHT] * 2_000
+    diagonal = "The fork to the left of the plate, slightly above it. " * 500
+    assert [r.key() for r in _parse(diagonal).relations] == [
+        ("dinner fork", "above and to the left of", "dinner plate")] * 500

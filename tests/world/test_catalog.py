@@ -173,3 +173,79 @@ def test_malformed_user_files(tmp_path: Path, text: str, field: str, message: st
 def test_unreadable_user_file(tmp_path: Path) -> None:
     with pytest.raises(CatalogError, match=r"missing\.yaml: cannot read"):
         Catalog.load([tmp_path / "missing.yaml"], use_env=False)
+
+
+def _entry(name: str, synonyms: str = "[]", shape: str = "box") -> str:
+    return (f"  - name: {name}\n    shape: {shape}\n    size: [0.03, 0.03]\n"
+            f"    height: 0.02\n    synonyms: {synonyms}\n")
+
+
+@pytest.mark.parametrize(("entries", "message"), [
+    ([_entry("mug"), _entry("spork"), _entry("saucer"), _entry("Mug")],
+     "objects[3] ('Mug'): duplicate name; objects[0] is already 'mug'"),
+    ([_entry("water cup", "[cup]"), _entry("cup")],
+     "objects[1] ('cup'): name 'cup' is already a synonym of objects[0] ('water cup')"),
+    ([_entry("cup"), _entry("water cup", "[Cup]")],
+     "objects[1] ('water cup').synonyms: 'Cup' is already the name of objects[0] ('cup')"),
+    ([_entry("water cup", "[cup]"), _entry("mug", "[teacup, 'cup!']")],
+     "objects[1] ('mug').synonyms: 'cup!' is already a synonym of objects[0] ('water cup')"),
+])
+def test_duplicate_names_within_one_file_are_refused(tmp_path: Path, entries: list[str],
+                                                     message: str) -> None:
+    path = write(tmp_path, "objects:\n" + "".join(entries))
+    with pytest.raises(CatalogError) as info:
+        Catalog.load([path], use_env=False)
+    assert str(info.value) == f"catalog {path}: {message}"
+
+
+def test_repeats_within_one_entry_are_harmless(tmp_path: Path) -> None:
+    path = write(tmp_path, "objects:\n" + _entry("spork", "[spork, foon, Foon, '!!']")
+                 + _entry("chopstick", "['??']"))
+    mine = Catalog.load([path], use_env=False)
+    assert mine.resolve("foon").name == "spork"
+
+
+def test_a_user_file_may_reuse_packaged_names_and_synonyms(tmp_path: Path,
+                                                          catalog: Catalog) -> None:
+    # Between files a later one overrides by name; only duplicates inside one file fail.
+    path = write(tmp_path, "objects:\n" + _entry("mug", "[teacup]", "circle")
+                 + _entry("cup", "[fork]"))
+    mine = Catalog.load([path], use_env=False)
+    assert mine.specs["mug"].size == (0.03, 0.03)
+    assert mine.resolve("cup").name == "cup"
+    assert mine.resolve("fork").name == catalog.resolve("fork").name
+
+
+def test_from_text_reads_one_file_alone() -> None:
+    mine = Catalog.from_text("objects:\n" + SPORK, "mine.yaml")
+    assert mine.names() == ["spork"]
+    with pytest.raises(CatalogError, match=r"^mine\.yaml: objects\[1\] \('spork'\): "
+                                           r"duplicate name"):
+        Catalog.from_text("objects:\n" + SPORK + SPORK, "mine.yaml")
+
+
+# Found by fuzzing (tests/fuzz, benchmarks/fuzz.py): each used to escape as another
+# exception type or a message over two lines.
+
+def test_a_user_file_that_is_not_utf8(tmp_path: Path) -> None:
+    path = tmp_path / "mine.yaml"
+    path.write_bytes(b"objects: [\xff\xfe]\n")
+    with pytest.raises(CatalogError, match=r"mine\.yaml: cannot read \(not UTF-8 text\)$"):
+        Catalog.load([path], use_env=False)
+
+
+@pytest.mark.parametrize("text", ["objects: !!int 0x\n", "objects: !!timestamp 2024-13-45\n",
+                                  "objects: !!timestamp\n", "objects: !!bool maybe\n",
+                                  "objects: !!int\n", "objects: !!float\n",
+                                  "objects: !!float abc\n"])
+def test_tagged_values_yaml_cannot_convert(text: str) -> None:
+    with pytest.raises(CatalogError, match=r"^c\.yaml: not valid YAML"):
+        Catalog.from_text(text, "c.yaml")
+
+
+def test_a_field_name_with_a_line_break_stays_on_one_line() -> None:
+    text = 'objects: [{name: spork, shape: box, size: [1, 1], height: 1, "x\\ny": 1}]\n'
+    with pytest.raises(CatalogError) as info:
+        Catalog.from_text(text, "c.yaml")
+    assert str(info.value) == ("c.yaml: objects[0] ('spork').'x\\ny': Extra inputs are not "
+                               "permitted, got 1")

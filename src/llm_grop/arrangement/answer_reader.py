@@ -40,159 +40,64 @@ How an answer is read:
   should not be ...") is dropped, as are self-relations and relations with an
   unrequested object. Lines from which something was dropped, and lines that
   name an object but yield no relation, are returned as ignored lines; lines
-  naming no object ("Sure! Here is a typical arrangement:") are not.
+  naming no object ("Sure! Here is a typical arrangement:") are not. An ignored
+  line is cut to :data:`MAX_IGNORED_CHARS` characters ("…" ends a cut one), and
+  past :data:`MAX_IGNORED_LINES` different ones a last entry says how many more
+  there were ("… and 57 more lines"), so that a huge answer is never echoed whole.
 * Instances: when items share a kind ("dinner fork", "dinner fork 2"), a
   mention of the kind as a subject is the first instance not yet used as a
   subject in this answer (a plural mention, "the forks", is every such
   instance); as a reference it is the first instance that is not a subject of
   the same relation ("one fork to the left of the other fork"). "dinner fork
   2" is matched as written.
+
+Cutting lines into sentences, words and tokens is :mod:`llm_grop.arrangement.answer_tokens`;
+this module reads relations out of the tokens. Both work in time linear in the answer's
+length (a megabyte-long answer takes well under a second).
 """
 
 from __future__ import annotations
 
 import functools
-import re
+from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
-from importlib import resources
+from dataclasses import dataclass, field
 
-import yaml
-
+from llm_grop.arrangement.answer_tokens import THINGS, Tok, Tokenizer, clean, sentences
 from llm_grop.world.arrangement import Item
-from llm_grop.world.catalog import Catalog, normalize_name
-from llm_grop.world.relation import CENTER, DIRECTION, RELATION_NAMES, STACKING, Relation
+from llm_grop.world.catalog import Catalog
+from llm_grop.world.relation import CENTER, DIRECTION, STACKING, Relation
 
-_ARTICLES = frozenset({"the", "a", "an"})
-_NEGATIONS = frozenset({"not", "never", "don't", "dont", "doesn't", "shouldn't", "avoid",
-                        "cannot", "can't", "mustn't", "isn't", "nor", "instead"})
-_PRONOUNS = frozenset({"it", "its", "it's"})
-_MAX_OBJECT_WORDS = 5
-_WORD_KINDS = {"and": "and", "&": "and", "with": "with", "which": "which", "that": "which",
-               **{w: "pron" for w in _PRONOUNS}, **{w: "neg" for w in _NEGATIONS}}
 #: Most words between a reference and a phrase that continues its clause
 #: ("the plate, slightly above ..."), so far-off prose does not.
 _MAX_FOLLOW_GAP = 3
-
-
-@dataclass(frozen=True)
-class _PhraseTable:
-    """Phrase (as words) -> (relation name, whether it is bare: takes no reference)."""
-
-    phrases: dict[tuple[str, ...], tuple[str, bool]]
-    fillers: frozenset[str]
-    longest: int
-
-
-@functools.lru_cache(maxsize=1)
-def _phrase_table() -> _PhraseTable:
-    data = yaml.safe_load(resources.files("llm_grop.arrangement").joinpath(
-        "prompts/relation_phrases.yaml").read_text("utf-8"))
-    phrases: dict[tuple[str, ...], tuple[str, bool]] = {}
-    for section, bare in (("relations", False), ("bare", True)):
-        for relation, texts in data[section].items():
-            if relation not in RELATION_NAMES:
-                raise ValueError(f"relation_phrases.yaml: {section}: unknown relation "
-                                 f"{relation!r}")
-            for text in texts:
-                phrases.setdefault(tuple(str(text).split()), (relation, bare))
-    return _PhraseTable(phrases, frozenset(data.get("fillers", ())),
-                        max(len(p) for p in phrases))
-
-
-_NUMBERING = re.compile(
-    r"^\s*(?:(?:step|example|answer|action)\s*\d*\s*[:.)-]?|\(?\d+\s*[.):-]|\(?[a-z][.)](?=\s)|"
-    r"[-•+*>]|a:)\s*", re.IGNORECASE)
-_SENTENCES = re.compile(r"(?<=[.!?;])\s+(?=\S)")
-_ITS = re.compile(r"\b(?:to|on|at)\s+(?:the\s+)?its\s+(left|right|upper left|upper right|"
-                  r"lower left|lower right)(?:\s+hand)?(?:\s+side)?\b")
-
-
-@dataclass(frozen=True)
-class _Tok:
-    """A token of a sentence: an object mention, a relation phrase, "and", "it", a negation."""
-
-    kind: str  # "obj", "foreign", "rel", "and", "pron", "neg", "with", "which"
-    value: str = ""
-    plural: bool = False
-    bare: bool = False
-    pos: int = 0  # index of the token's first word in the sentence
-    end: int = 0  # index after its last word
-
-
-def _clean(line: str) -> str:
-    line = re.sub(r"[*_`#|]+", " ", line)
-    previous = None
-    while previous != line:
-        previous, line = line, _NUMBERING.sub("", line, count=1)
-    return re.sub(r"\s+([,.:;!?])", r"\1", re.sub(r"\s+", " ", line)).strip()
-
-
-def _words(sentence: str) -> list[str]:
-    text = sentence.lower().replace("’", "'").replace("-", " ").replace("–", " ")
-    text = _ITS.sub(lambda m: f"to the {m.group(1)} of it", text)
-    text = re.sub(r"[^a-z0-9' ]+", " ", text)
-    return [w.strip("'") for w in text.split() if w not in _ARTICLES and w.strip("'")]
+#: Most characters of an ignored line that are kept (a longer one ends in "…"), so a
+#: huge answer is never echoed whole in warnings.
+MAX_IGNORED_CHARS = 120
+#: Most ignored lines kept per answer; one more entry then says how many were left out.
+MAX_IGNORED_LINES = 20
 
 
 class _Reader:
-    """Tokenises sentences and keeps the state of one answer (subjects used, history)."""
+    """Keeps the state of one answer: the subjects used and the objects named so far."""
 
     def __init__(self, items: Sequence[Item], catalog: Catalog) -> None:
-        self.catalog = catalog
-        self.instances = {it.name for it in items}
+        self.tokenizer = Tokenizer(items, catalog)
         self.by_kind: dict[str, list[str]] = {}
         for it in items:
             self.by_kind.setdefault(it.kind, []).append(it.name)
-        self.aliases = catalog.aliases()
-        self.table = _phrase_table()
         self.used_as_subject: set[str] = set()
-        self.history: list[str] = []
+        # Objects related so far, the most recent last (a name moves to the end when it
+        # comes again): only the latest mention of each matters to "it".
+        self.recent: dict[str, None] = {}
         self.last_reference: str | None = None
 
-    def tokens(self, words: list[str]) -> list[_Tok]:
-        out: list[_Tok] = []
-        i = 0
-        while i < len(words):
-            hit = self._object_at(words, i) or self._phrase_at(words, i)
-            if hit is not None:
-                out.append(replace(hit[0], pos=i, end=i + hit[1]))
-                i += hit[1]
-                continue
-            kind = _WORD_KINDS.get(words[i])
-            if kind is not None:
-                out.append(_Tok(kind, pos=i, end=i + 1))
-            i += 1
-        return out
+    def mention(self, name: str) -> None:
+        """Notes that ``name`` was just related."""
+        self.recent.pop(name, None)
+        self.recent[name] = None
 
-    def _object_at(self, words: list[str], i: int) -> tuple[_Tok, int] | None:
-        for n in range(min(_MAX_OBJECT_WORDS, len(words) - i), 0, -1):
-            text = " ".join(words[i:i + n])
-            if text in self.instances and text not in self.by_kind:
-                return _Tok("obj", text), n
-            spec = self.catalog.lookup(text)
-            if spec is not None:
-                plural = normalize_name(text) not in self.aliases
-                kind = "obj" if spec.name in self.by_kind else "foreign"
-                return _Tok(kind, spec.name, plural), n
-        return None
-
-    def _phrase_at(self, words: list[str], i: int) -> tuple[_Tok, int] | None:
-        if words[i] in self.table.fillers:
-            return None
-        kept: list[int] = []
-        j = i
-        while j < len(words) and len(kept) < self.table.longest:
-            if words[j] not in self.table.fillers:
-                kept.append(j)
-            j += 1
-        for n in range(len(kept), 0, -1):
-            hit = self.table.phrases.get(tuple(words[k] for k in kept[:n]))
-            if hit is not None:
-                return _Tok("rel", hit[0], bare=hit[1]), kept[n - 1] - i + 1
-        return None
-
-    def subjects(self, tok: _Tok) -> list[str]:
+    def subjects(self, tok: Tok) -> list[str]:
         if tok.value not in self.by_kind:
             return [tok.value]
         free = [n for n in self.by_kind[tok.value] if n not in self.used_as_subject]
@@ -200,16 +105,17 @@ class _Reader:
             return [self.by_kind[tok.value][0]]
         return free if tok.plural else free[:1]
 
-    def reference(self, tok: _Tok, subjects: Sequence[str]) -> str | None:
+    def reference(self, tok: Tok, subjects: Sequence[str]) -> str | None:
         if tok.kind == "pron":
             if self.last_reference is not None and self.last_reference not in subjects:
                 return self.last_reference
-            return next((n for n in reversed(self.history) if n not in subjects), None)
+            return next((n for n in reversed(self.recent) if n not in subjects), None)
         names = self.by_kind.get(tok.value, [tok.value])
         return next((n for n in names if n not in subjects), names[0])
 
 
-def _combine(rels: Sequence[str]) -> str:
+@functools.lru_cache(maxsize=1024)
+def _combine(rels: tuple[str, ...]) -> str:
     """One relation from the phrases before a reference: the directional ones win, and a
     vertical plus a horizontal one make a diagonal."""
     directional = [r for r in rels if r in DIRECTION and r not in STACKING]
@@ -231,13 +137,10 @@ class _LineResult:
     last_subjects: list[str] = field(default_factory=list)
 
 
-_THINGS = ("obj", "foreign")
-
-
-def _read_sentence(toks: list[_Tok], reader: _Reader, line: str, out: _LineResult) -> None:
+def _read_sentence(toks: list[Tok], reader: _Reader, line: str, out: _LineResult) -> None:
     """Adds the relations of one sentence's tokens to ``out``."""
 
-    def emit(subject_toks: Sequence[_Tok], rel: str, ref_tok: _Tok | None, negated: bool,
+    def emit(subject_toks: Sequence[Tok], rel: str, ref_tok: Tok | None, negated: bool,
              names: Sequence[str] = ()) -> None:
         if negated or any(t.kind == "foreign" for t in subject_toks) or (
                 ref_tok is not None and ref_tok.kind == "foreign"):
@@ -252,18 +155,19 @@ def _read_sentence(toks: list[_Tok], reader: _Reader, line: str, out: _LineResul
             if subject == reference:
                 out.dropped = True
                 continue
-            out.relations.append(Relation(subject, rel, reference, line))
+            out.relations.append(Relation(subject, rel, reference, _kept(line)))
             reader.used_as_subject.add(subject)
-            reader.history.append(subject)
+            reader.mention(subject)
         out.last_subjects = subjects
         if reference is not None:
-            reader.history.append(reference)
+            reader.mention(reference)
             reader.last_reference = out.last_reference = reference
 
     start = i = _read_fronted(toks, emit)
     chained = -1  # index of the last reference, which may open the next clause
+    ahead: list[int | None] | None = None  # _references_ahead(toks), once it is needed
     while i < len(toks):
-        if toks[i].kind not in _THINGS:
+        if toks[i].kind not in THINGS:
             i += 1
             continue
         follow = i == chained and i + 1 < len(toks) and (
@@ -275,17 +179,19 @@ def _read_sentence(toks: list[_Tok], reader: _Reader, line: str, out: _LineResul
                 toks[j + 1].kind == "rel"):
             which = toks[j].kind == "which"
             j += 1
-        rels: list[_Tok] = []
+        rels: list[Tok] = []
         while j < len(toks) and toks[j].kind == "rel":
             rels.append(toks[j])
             j += 1
         if not rels:
-            i += 1
+            # The rest of the group ends at the same j, so has no phrase either; skipping
+            # it keeps "A and B and C and ..." linear.
+            i = i + 1 if follow else j
             continue
-        rel = _combine([t.value for t in rels])
+        rel = _combine(tuple(t.value for t in rels))
         negated = any(t.kind == "neg" for t in toks[start:j])
         target = (toks[j] if not rels[-1].bare and j < len(toks)
-                  and toks[j].kind in (*_THINGS, "pron") else None)
+                  and toks[j].kind in (*THINGS, "pron") else None)
         subjects = [toks[g] for g in group]
         # After "S <rel> R", a further phrase is about S again ("..., above the knife"),
         # unless "which"/"that" makes R its subject.
@@ -308,15 +214,18 @@ def _read_sentence(toks: list[_Tok], reader: _Reader, line: str, out: _LineResul
                 emit(subjects, rel, target, negated)
             next_i = j + 1
         elif out.last_reference is not None:
-            emit(subjects, rel, _Tok("obj", out.last_reference), negated)
-        elif (ahead := _reference_ahead(toks, j)) is not None:
-            emit(subjects, rel, toks[ahead], negated)
+            emit(subjects, rel, Tok("obj", out.last_reference), negated)
         else:
-            out.dropped = True
+            ahead = ahead or _references_ahead(toks)
+            shared = ahead[j]
+            if shared is not None:
+                emit(subjects, rel, toks[shared], negated)
+            else:
+                out.dropped = True
         i = start = next_i
 
 
-def _read_fronted(toks: list[_Tok], emit: Callable[..., None]) -> int:
+def _read_fronted(toks: list[Tok], emit: Callable[..., None]) -> int:
     """Reads "To the left of the plate, place the fork." / "In the center, place the plate."
     at the start of a sentence; returns the index of the first token left unread."""
     k = 0
@@ -328,9 +237,9 @@ def _read_fronted(toks: list[_Tok], emit: Callable[..., None]) -> int:
         k += 1
     if not rels:
         return 0
-    rel = _combine(rels)
+    rel = _combine(tuple(rels))
     ref = (toks[k] if rel != CENTER and not toks[k - 1].bare and k < len(toks)
-           and toks[k].kind in (*_THINGS, "pron") else None)
+           and toks[k].kind in (*THINGS, "pron") else None)
     s0 = k + 1 if ref is not None else k
     group = _group(toks, s0)
     after = group[-1] + 1 if group else s0
@@ -341,18 +250,22 @@ def _read_fronted(toks: list[_Tok], emit: Callable[..., None]) -> int:
     return after
 
 
-def _reference_ahead(toks: list[_Tok], j: int) -> int | None:
-    """The reference of a later clause that an elided one shares: in "the fork on the left
-    and the knife on the right of the plate", the plate."""
-    m = j
-    while m < len(toks) and toks[m].kind in ("and", "obj", "rel"):
-        if toks[m].kind == "obj" and toks[m - 1].kind == "rel" and not toks[m - 1].bare:
-            return m
-        m += 1
-    return None
+def _references_ahead(toks: list[Tok]) -> list[int | None]:
+    """For each index ``j``, the reference of a later clause that an elided one ending at
+    ``j`` shares (in "the fork on the left and the knife on the right of the plate", the
+    plate): the first object from ``j`` on, within a run of "and"s, objects and phrases,
+    that follows a phrase taking a reference. One backward pass, so that reading every
+    clause of a long sentence stays linear."""
+    out: list[int | None] = [None] * (len(toks) + 1)
+    for m in range(len(toks) - 1, 0, -1):
+        if toks[m].kind in ("and", "obj", "rel"):
+            is_ref = (toks[m].kind == "obj" and toks[m - 1].kind == "rel"
+                      and not toks[m - 1].bare)
+            out[m] = m if is_ref else out[m + 1]
+    return out
 
 
-def _group(toks: list[_Tok], i: int) -> list[int]:
+def _group(toks: list[Tok], i: int) -> list[int]:
     """Indices of "A and B and C" starting at ``i`` (empty when ``toks[i]`` is no object)."""
     if i >= len(toks) or toks[i].kind not in ("obj", "foreign"):
         return []
@@ -363,46 +276,84 @@ def _group(toks: list[_Tok], i: int) -> list[int]:
     return group
 
 
+#: The relations along one axis, and the relations across it.
+_HORIZONTAL = tuple(r for r, (dx, dy) in DIRECTION.items() if dx and not dy)
+_VERTICAL = tuple(r for r, (dx, dy) in DIRECTION.items() if dy and not dx)
+_ACROSS = {**dict.fromkeys(_HORIZONTAL, _VERTICAL), **dict.fromkeys(_VERTICAL, _HORIZONTAL)}
+
+
 def _merge_diagonals(rels: list[Relation]) -> list[Relation]:
     """One line's "left of R" and "above R" for the same subject, as "above and to the left
-    of R" (as in "to the left of the fork, slightly above it")."""
+    of R" (as in "to the left of the fork, slightly above it").
+
+    A relation merges with the first earlier one across its axis between the same
+    objects. Those are kept in queues by (subject, reference, relation), so that a line of
+    thousands of relations is merged in linear time.
+    """
     out: list[Relation] = []
+    waiting: dict[tuple[str, str | None, str], deque[int]] = {}
     for rel in rels:
-        twin = next((k for k, r in enumerate(out) if r.subject == rel.subject
-                     and r.reference == rel.reference and r.relation != rel.relation
-                     and _orthogonal(r.relation, rel.relation)), None)
-        if twin is None:
+        across = _ACROSS.get(rel.relation, ())
+        queues = [q for r in across if (q := waiting.get((rel.subject, rel.reference, r)))]
+        if not queues:
+            if across:
+                waiting.setdefault((rel.subject, rel.reference, rel.relation),
+                                   deque()).append(len(out))
             out.append(rel)
-        else:
-            out[twin] = Relation(rel.subject, _combine([out[twin].relation, rel.relation]),
-                                 rel.reference, rel.line)
+            continue
+        # A merged relation is a diagonal, which merges with nothing more.
+        twin = min(queues, key=lambda q: q[0]).popleft()
+        out[twin] = Relation(rel.subject, _combine((out[twin].relation, rel.relation)),
+                             rel.reference, rel.line)
     return out
 
 
-def _orthogonal(a: str, b: str) -> bool:
-    da, db = DIRECTION.get(a), DIRECTION.get(b)
-    return (da is not None and db is not None and 0 in da and 0 in db and da != (0, 0)
-            and db != (0, 0) and (da[0] == 0) != (db[0] == 0))
+#: Longest source line a relation keeps, in characters: it is quoted in warnings and in
+#: the JSON's ``conflicts``, and a relation is one short sentence.
+MAX_LINE_CHARS = 500
+
+
+def _kept(line: str) -> str:
+    """``line`` as a relation keeps it: at most :data:`MAX_LINE_CHARS` characters."""
+    return line if len(line) <= MAX_LINE_CHARS else line[:MAX_LINE_CHARS - 1] + "…"
+
+
+def _shorten(line: str) -> str:
+    """``line`` cut to :data:`MAX_IGNORED_CHARS` characters, ending in "…" when cut."""
+    if len(line) <= MAX_IGNORED_CHARS:
+        return line
+    return line[:MAX_IGNORED_CHARS - 1].rstrip() + "…"
 
 
 def read_answer(text: str, items: Sequence[Item], catalog: Catalog
                 ) -> tuple[list[Relation], list[str]]:
     """The relations ``text`` states between ``items``, and the lines it could not fully use
-    (both as cleaned source lines; see the module docstring)."""
+    (both as cleaned source lines; see the module docstring).
+
+    Ignored lines are shortened to :data:`MAX_IGNORED_CHARS` characters and, past the
+    first :data:`MAX_IGNORED_LINES` different ones, counted in a last entry
+    "… and N more lines".
+    """
     reader = _Reader(items, catalog)
     relations: list[Relation] = []
     ignored: list[str] = []
+    seen: set[str] = set()
     for raw in text.splitlines():
-        source = _clean(raw)
+        source = clean(raw)
         if not source:
             continue
         result = _LineResult([])
         mentions = False
-        for sentence in _SENTENCES.split(source):
-            toks = reader.tokens(_words(_clean(sentence)))
-            mentions = mentions or any(t.kind in _THINGS for t in toks)
+        for sentence in sentences(source):
+            toks = reader.tokenizer.sentence_tokens(sentence)
+            mentions = mentions or any(t.kind in THINGS for t in toks)
             _read_sentence(toks, reader, source, result)
         relations += _merge_diagonals(result.relations)
-        if (result.dropped or (mentions and not result.relations)) and source not in ignored:
-            ignored.append(source)
+        short = _shorten(source)
+        if (result.dropped or (mentions and not result.relations)) and short not in seen:
+            seen.add(short)
+            if len(ignored) < MAX_IGNORED_LINES:
+                ignored.append(short)
+    if len(seen) > len(ignored):
+        ignored.append(f"… and {len(seen) - len(ignored)} more lines")
     return relations, ignored

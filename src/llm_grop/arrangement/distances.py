@@ -18,12 +18,21 @@ number can be read :data:`DEFAULT_EDGE_GAP_CM` is used. How
 * Without any unit, the first number is read as centimetres.
 * A negative distance, one above :data:`MAX_GAP_CM`, or none at all gives ``None``;
   :func:`parse_distance_m` then falls back to :data:`DEFAULT_GAP_CM`.
+* Numbers: "1,000" (comma thousands groups), "1e3" (exponents), "2½"/"¼"/"¾".
+  The text is NFKC-normalised first, so fullwidth ("１０ ｃｍ") and mathematical
+  digits read as ASCII ones and thin or no-break spaces as spaces; only ASCII
+  digits are then read (Arabic-Indic and other scripts' digits are not). The
+  Unicode minus "−", "‐", "‑", "‒" and the en and em dashes are hyphens, so "−5 cm"
+  is negative and "5–7 cm" a range. Superscripts, subscripts, circled digits and
+  other fractions ("²", "₂", "①", "⅓"), which NFKC would turn into digits, are
+  read as spaces: "5 cm²" is 5 cm, and "① Place it" holds no number.
 """
 
 from __future__ import annotations
 
 import functools
 import re
+import unicodedata
 from importlib import resources
 
 from llm_grop.world.relation import CENTER, STACKING, Relation
@@ -51,14 +60,19 @@ _DIGITS = {"one": 1, **_ONES}
 _TENS = {"twenty": 20, "thirty": 30, "forty": 40, "fifty": 50, "sixty": 60, "seventy": 70,
          "eighty": 80, "ninety": 90}
 
-_NUM = r"\d+(?:\.\d+)?|\.\d+"
+# ASCII digits only ([0-9], not \d): other scripts' digits are not read (module docstring).
+_NUM = r"(?:(?:[0-9]{1,3}(?:,[0-9]{3})+|[0-9]+)(?:\.[0-9]+)?|\.[0-9]+)(?:e[+-]?[0-9]+)?"
 _UNIT = (r"centimet(?:er|re)s?|cms?|millimet(?:er|re)s?|mm|met(?:er|re)s?|m|"
          r"inch(?:es)?|in\.|in(?=\s*(?:$|[,;:)!?]))|″|ft|foot|feet")
 _QUANTITY = re.compile(
     rf"(?<![\w.])({_NUM})(?:\s*({_UNIT})(?![a-z]))?(?:\s*(?:-|to|and|or)\s*({_NUM}))?\s*({_UNIT})"
     r"(?![a-z])")
 _BARE = re.compile(rf"(?<![\w.])({_NUM})(?:\s*(?:-|to|or)\s*({_NUM}))?(?![\w])")
-_LIST_NUMBER = re.compile(r"^\s*(?:step\s*)?\d+\s*[.):]\s+", re.MULTILINE)
+_LIST_NUMBER = re.compile(r"^\s*(?:step\s*)?[0-9]+\s*[.):]\s+", re.MULTILINE)
+#: Characters read as a hyphen (so as a minus sign or a range's dash).
+_DASHES = str.maketrans(dict.fromkeys("\u2010\u2011\u2012\u2013\u2014\u2212", "-"))
+#: Fractions read as decimals (before NFKC, which would make "½" the digits "1⁄2").
+_FRACTIONS = {"½": ".5", "¼": ".25", "¾": ".75"}
 
 
 @functools.lru_cache(maxsize=4)
@@ -125,16 +139,33 @@ def _in_range(cm: float) -> float | None:
     return cm if 0.0 <= cm <= MAX_GAP_CM else None
 
 
+def _number(text: str) -> float:
+    """A matched ``_NUM`` as a float ("1,000" -> 1000.0; "1e999" -> inf)."""
+    return float(text.replace(",", ""))
+
+
+def _normalized(text: str) -> str:
+    """``text`` lower case and NFKC-normalised, with the module docstring's dashes,
+    fractions and non-decimal digits replaced."""
+    for fraction, decimal in _FRACTIONS.items():
+        text = text.replace(fraction, decimal)
+    if not text.isascii():
+        # NFKC turns "²", "①" and "⅓" into digits; they are no numbers of a distance.
+        text = "".join(" " if ch.isnumeric() and not ch.isdecimal() else ch for ch in text)
+        # NFKC makes the double prime (inches) two primes.
+        text = unicodedata.normalize("NFKC", text).replace("′′", "″")
+    return text.lower().translate(_DASHES)
+
+
 def parse_distance_cm(text: str) -> float | None:
     """The distance an answer gives, in centimetres, or ``None`` when none can be read."""
-    text = text.lower().replace("½", ".5").replace("–", "-").replace("—", "-")
-    text = _words_to_digits(re.sub(r"[*_`]", "", text))
+    text = _words_to_digits(re.sub(r"[*_`]", "", _normalized(text)))
     m = _QUANTITY.search(text)
     if m:
         if re.search(r"(?:-|minus\s*)$", text[:m.start()]):
             return None
-        low = float(m.group(1))
-        high = float(m.group(3)) if m.group(3) else low
+        low = _number(m.group(1))
+        high = _number(m.group(3)) if m.group(3) else low
         cm = (low + high) / 2 * _unit_cm(m.group(4))
         return _in_range(cm)
     m = _BARE.search(_LIST_NUMBER.sub("", text))
@@ -142,8 +173,8 @@ def parse_distance_cm(text: str) -> float | None:
         return None
     if re.search(r"(?:-|minus\s*)$", _LIST_NUMBER.sub("", text)[:m.start()]):
         return None
-    low = float(m.group(1))
-    high = float(m.group(2)) if m.group(2) else low
+    low = _number(m.group(1))
+    high = _number(m.group(2)) if m.group(2) else low
     return _in_range((low + high) / 2)
 
 

@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from llm_grop.arrangement.geometry import GuidedLayout, Key
+from llm_grop.arrangement.layout import GuidedLayout, Key
 from llm_grop.arrangement.predicates import Footprint
 from llm_grop.world.arrangement import Configuration
 from llm_grop.world.fidelity import Fidelity, GapFidelity

@@ -44,11 +44,18 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from llm_grop.arrangement.fit import fit_circle, smallest_shift
+from llm_grop.arrangement.layout import (
+    DINER_SIGMA_M,
+    FREE_SIGMA_M,
+    SIGMA_BY_RELATION_M,
+    STACK_SIGMA_M,
+    GuidedLayout,
+    Key,
+)
 from llm_grop.arrangement.predicates import (
     CENTER_FRACTION,
     Footprint,
@@ -59,18 +66,10 @@ from llm_grop.arrangement.predicates import (
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item
 from llm_grop.world.relation import (
-    ABOVE,
-    ABOVE_LEFT,
-    ABOVE_RIGHT,
-    BELOW,
-    BELOW_LEFT,
-    BELOW_RIGHT,
     CENTER,
     CONVERSE,
     DIRECTION,
-    LEFT,
     ON_TOP_OF,
-    RIGHT,
     UNDER,
     Relation,
 )
@@ -82,68 +81,9 @@ DEFAULT_GAP_M = 0.05
 #: Step, in metres, by which a position that overlaps a placed object is pushed outwards.
 PUSH_STEP_M = 0.01
 
-#: Sampling std dev, metres, along an axis on which a gap was stated: a third of the
-#: fidelity tolerance, so that nearly every draw keeps the gap.
-GAP_SIGMA_M = 0.005
-
-#: Sampling std dev, metres, across a cardinal relation's direction (the authors' value).
-ACROSS_SIGMA_M = 0.01
-
-#: Sampling std dev ``(sx, sy)`` in metres, relative to the anchor, by the relation that
-#: placed an object: tight along the gap, looser across a cardinal relation's direction.
-SIGMA_BY_RELATION_M: Mapping[str, tuple[float, float]] = {
-    ABOVE: (ACROSS_SIGMA_M, GAP_SIGMA_M), BELOW: (ACROSS_SIGMA_M, GAP_SIGMA_M),
-    LEFT: (GAP_SIGMA_M, ACROSS_SIGMA_M), RIGHT: (GAP_SIGMA_M, ACROSS_SIGMA_M),
-    ABOVE_LEFT: (GAP_SIGMA_M, GAP_SIGMA_M), ABOVE_RIGHT: (GAP_SIGMA_M, GAP_SIGMA_M),
-    BELOW_LEFT: (GAP_SIGMA_M, GAP_SIGMA_M), BELOW_RIGHT: (GAP_SIGMA_M, GAP_SIGMA_M),
-}
-
-#: Std dev in metres for an origin with no stated distance from the diner, or an
-#: unconnected group's origin (the authors' value).
-FREE_SIGMA_M = (0.03, 0.03)
-
-#: Std dev in metres for the origin placed at the diner's stated distance: free along
-#: the edge (where the whole setting sits), tight towards the diner.
-DINER_SIGMA_M = (FREE_SIGMA_M[0], GAP_SIGMA_M)
-
-#: Std dev in metres for an object resting on another: it follows its support's
-#: sampled position almost exactly. (An object placed as the support *under* a
-#: placed one takes that object's std dev instead: it carries the stack.)
-STACK_SIGMA_M = (0.002, 0.002)
-
-Key = tuple[str, str, str | None]
-
-
-@dataclass(frozen=True)
-class GuidedLayout:
-    """LLM-guided positions and the sampler's settings, in the table frame, in metres.
-
-    ``positions``: guided centre ``(x, y)`` per item. ``sigma``: Gaussian std dev
-    ``(sx, sy)`` per item. ``support``: what each item rests on (``None``: the table).
-    ``order``: the sampling order, the origin first, then breadth-first along the
-    relations; a support always comes before what it supports. ``anchor``: the object,
-    earlier in ``order``, whose sampled position each item is drawn around (``None``: an
-    origin, drawn around its own position). ``edge_gap_m``: the origin's stated distance
-    from the diner's edge of the table (``None``: not stated; the origin is at the centre).
-    """
-
-    origin: str
-    positions: Mapping[str, tuple[float, float]]
-    sigma: Mapping[str, tuple[float, float]]
-    support: Mapping[str, str | None]
-    order: tuple[str, ...]
-    anchor: Mapping[str, str | None] = field(default_factory=dict)
-    edge_gap_m: float | None = None
-
-    def offset(self, name: str) -> tuple[float, float]:
-        """``name``'s guided position relative to its anchor's (its own if it has none)."""
-        x, y = self.positions[name]
-        a = self.anchor.get(name)
-        if a is None:
-            return (x, y)
-        ax, ay = self.positions[a]
-        return (x - ax, y - ay)
-
+#: The most :data:`PUSH_STEP_M` steps one push tries (100 m), whatever the table's size
+#: or the LLM's gaps: a bound on the memory a push takes (a few MB).
+MAX_PUSH_STEPS = 10_000
 
 def choose_origin(items: Sequence[Item], relations: Sequence[Relation],
                   anchored: Collection[str] = ()) -> str:
@@ -265,7 +205,7 @@ class _Builder:
         # A diagonal may also be pushed along one of its axes: it stays strict on both.
         ways = [(dx, dy)] if 0 in (dx, dy) else [(dx, dy), (dx, 0), (0, dy)]
         l0, b0, r0, t0 = self.bbox(placed)
-        steps = np.arange(int(max(self.table.width, self.table.depth) / PUSH_STEP_M) + 1)
+        steps = np.arange(self._push_steps(x, y, fq, (l0, b0, r0, t0)) + 1)
         best: tuple[float, float] | None = None
         best_score = (math.inf, math.inf)
         for ux, uy in ways:
@@ -283,6 +223,20 @@ class _Builder:
             if score < best_score:
                 best, best_score = (float(cx[k]), float(cy[k])), score
         return best if best is not None else (x, y)
+
+    def _push_steps(self, x: float, y: float, fq: Footprint,
+                    box: tuple[float, float, float, float]) -> int:
+        """How many :data:`PUSH_STEP_M` steps a position ``(x, y)`` (metres) may be pushed:
+        a table's size, but never further than it takes to clear ``box``, the placed
+        footprints' bounding box (beyond it, footprints inflated by less than twice
+        included, nothing can overlap), so the steps tried stay few however large the
+        table (at most :data:`MAX_PUSH_STEPS`). The push chosen is the same as with a
+        table's size of steps: the first clear step lies within the bound."""
+        left, bottom, right, top = box
+        clear_m = (right - left) + (top - bottom) + 2 * (fq.hx + fq.hy) \
+            + abs(x - (left + right) / 2) + abs(y - (bottom + top) / 2)
+        table_m = max(self.table.width, self.table.depth)
+        return min(int(min(table_m, clear_m + PUSH_STEP_M) / PUSH_STEP_M), MAX_PUSH_STEPS)
 
     def bbox(self, names: Sequence[str]) -> tuple[float, float, float, float]:
         """``(left, bottom, right, top)`` of the footprints of ``names``."""

@@ -26,14 +26,16 @@ from llm_grop.arrangement import (
     relations,
     sampling,
 )
+from llm_grop.arrangement.layout import GuidedLayout
 from llm_grop.arrangement.setting import Attempt, Sampled, Setting
 from llm_grop.errors import Infeasible, LLMError, ReplayMissing
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.fidelity import Fidelity
-from llm_grop.world.llmlog import LLMSummary
+from llm_grop.world.llmlog import CallRecord, LLMSummary
 from llm_grop.world.relation import CENTER, STACKING, Relation
+from llm_grop.world.request import Request
 from llm_grop.world.table import Table
 
 log = logging.getLogger(__name__)
@@ -51,7 +53,9 @@ class ArrangeOptions:
     (capped at 1.0), because at the paper's 0.1 a new seed alone rarely changes
     the answer. ``gap_tolerance_m``: every configuration keeps each stated gap and the
     diner's distance within this many metres (``None``: no such check; see
-    :mod:`llm_grop.arrangement.fidelity`).
+    :mod:`llm_grop.arrangement.fidelity`). ``stated``: relations the request states
+    between its objects (``source="request"``, first diner's names); they take the
+    preferences' precedence.
     """
 
     m: int = 25
@@ -63,6 +67,7 @@ class ArrangeOptions:
     preferences: tuple[str, ...] = ()
     preference_pool: tuple[str, ...] = ()
     gap_tolerance_m: float | None = fidelity.GAP_TOLERANCE_M
+    stated: tuple[Relation, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -78,7 +83,7 @@ class ArrangementResult:
 
     arrangement: Arrangement
     configurations: tuple[Configuration, ...]
-    layout: geometry.GuidedLayout
+    layout: GuidedLayout
     attempts: tuple[Attempt, ...]
     dropped: tuple[Relation, ...]
     gaps_m: dict[tuple[str, str, str | None], float]
@@ -156,10 +161,13 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
     attempts: list[Attempt] = []
     accepted: tuple[Relation, ...] = ()
     dropped: list[Relation] = []
-    prefs = preferences.read_preferences(options.preferences, options.preference_pool,
-                                         items, catalog)
+    names = {it.name for it in items}
+    stated = [r for r in options.stated if r.subject in names
+              and (r.reference is None or r.reference in names)]
+    prefs = preferences.combine(stated, preferences.read_preferences(
+        options.preferences, options.preference_pool, items, catalog))
     if preferences.covers(prefs, items):
-        say("the preferences relate every object: Template 1 is not asked")
+        say("the stated relations relate every object: Template 1 is not asked")
     elif len(items) > 1:
         for k in range(options.max_attempts):
             say(f"asking {llm.model} for symbolic relations "
@@ -180,14 +188,18 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
                 raise LLMError(
                     f"{llm.backend} LLM gave no usable spatial relation in "
                     f"{options.max_attempts} attempt(s){detail}")
-            warnings += [f"dropped to restore consistency: {r.line or r.sentence()}"
+            warnings += [f"dropped to restore consistency: {_preview(r.line or r.sentence())}"
                          for r in dropped]
         for attempt in attempts:
             warnings += [f"ignored LLM line: {line}" for line in attempt.ignored if line]
     if prefs:
         accepted, overridden = preferences.merge(prefs, accepted)
-        warnings += [f"overridden by a preference: {r.line or r.sentence()}"
+        warnings += [f"overridden by a stated relation: {_preview(r.line or r.sentence())}"
                      for r in overridden]
+    related = {r.subject for r in accepted} | {r.reference for r in accepted}
+    warnings += [f"no usable relation for the {it.name}: the answers left it out, so "
+                 f"the sampler places it alone" for it in items
+                 if len(items) > 1 and it.name not in related]
 
     gaps: dict[tuple[str, str, str | None], float] = {}
     stated = preferences.stated_gaps(prefs, table)
@@ -203,7 +215,7 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
                               distances.template2_grammar())
         gaps[rel.key()], defaulted = distances.parse_distance_m(record.response)
         if defaulted:
-            warnings.append(f"no distance in {record.response.strip()!r}; used "
+            warnings.append(f"no distance in {_preview(record.response)!r}; used "
                             f"{distances.DEFAULT_GAP_CM:g} cm for: {rel.sentence()}")
     origin, edge_gap = _edge_distance(items, accepted, llm, catalog, table, seed, options, say,
                                       warnings)
@@ -241,10 +253,16 @@ def _edge_distance(items: Sequence[Item], accepted: Sequence[Relation], llm: Cal
                         f"{distances.DEFAULT_EDGE_GAP_CM:g} cm for the {origin}")
         edge_gap = distances.DEFAULT_EDGE_GAP_CM / 100
     elif defaulted:
-        warnings.append(f"no distance in {answer.strip()[:80]!r}; used "
+        warnings.append(f"no distance in {_preview(answer)!r}; used "
                         f"{distances.DEFAULT_EDGE_GAP_CM:g} cm from the diner's edge "
                         f"for the {origin}")
     return origin, edge_gap
+
+
+def _preview(answer: str, limit: int = 120) -> str:
+    """An LLM answer shortened for a warning: one line of at most ``limit`` characters."""
+    text = " ".join(answer[:4 * limit].split())
+    return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
 def sample_setting(items: Sequence[Item], setting: Setting, table: Table,
@@ -277,10 +295,15 @@ def sample_setting(items: Sequence[Item], setting: Setting, table: Table,
     return Sampled(layout, configs, measured, tuple(warnings))
 
 
-def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Catalog,
-                  table: Table, seed: int = 0, options: ArrangeOptions | None = None,
+def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
+                  catalog: Catalog, table: Table, seed: int = 0,
+                  options: ArrangeOptions | None = None,
                   on_event: Callable[[str], None] | None = None) -> ArrangementResult:
     """Arrange ``items`` on ``table``: relations from the LLM, checked, grounded and sampled.
+
+    ``request`` is the request's text, or the :class:`~llm_grop.world.request.Request`
+    read from it: then the relations it states join the preferences, and the LLM calls
+    and warnings of its reading join the arrangement's.
 
     Items with a ``diner`` index are several diners' settings (``table.diners`` seats them):
     the LLM is asked once per distinct setting, and each diner's setting is laid out and
@@ -290,6 +313,15 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
     relation and :class:`~llm_grop.errors.Infeasible` when no configuration fits.
     """
     options = options or ArrangeOptions()
+    reading_calls: tuple[CallRecord, ...] = ()
+    reading_warnings: tuple[str, ...] = ()
+    read_by = None
+    if isinstance(request, Request):
+        read_by = request.source
+        options = replace(options, stated=options.stated + request.relations)
+        reading_calls, reading_warnings = request.calls, request.warnings
+        request = request.text
+
     def say(message: str) -> None:
         log.info(message)
         if on_event is not None:
@@ -323,7 +355,8 @@ def arrange_items(request: str, items: Sequence[Item], llm: CallLog, catalog: Ca
     arrangement = Arrangement(
         request=request, table=table, placements=configs[0].placements,
         relations=relations_all,
-        llm=LLMSummary(llm.backend, llm.model, tuple(llm.calls[first_call:])),
-        warnings=warnings, conflicts=tuple(a.conflict for a in attempts if a.conflict))
+        llm=LLMSummary(llm.backend, llm.model, reading_calls + tuple(llm.calls[first_call:])),
+        warnings=reading_warnings + warnings,
+        conflicts=tuple(a.conflict for a in attempts if a.conflict), read_by=read_by)
     return ArrangementResult(arrangement, tuple(configs), layout, attempts, dropped, gaps,
                              edge_gap, tuple(measured))

@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
+from typing import Annotated
 
-import yaml
+from pydantic import BaseModel, StringConstraints
 
 from llm_grop.arrangement import consistency
 from llm_grop.arrangement.distances import parse_distance_cm, parse_distance_m
@@ -28,6 +30,7 @@ from llm_grop.arrangement.relations import parse_relations
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
+from llm_grop.world.datafile import load_yaml_model
 from llm_grop.world.relation import Relation
 from llm_grop.world.request import items_from_names
 from llm_grop.world.table import Table
@@ -127,17 +130,32 @@ def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequen
         if not parse_relations(sentence, everything, catalog).relations:
             raise BadInput(f"preferences: cannot read {sentence!r} as a relation between "
                            "catalog objects")
+    return combine((), [replace(r, source="preference") for r in out])
+
+
+def combine(stated: Sequence[Relation], preferences: Sequence[Relation]
+            ) -> tuple[Relation, ...]:
+    """The relations the request ``stated`` and the ``preferences``, repeats dropped (the
+    request's first). They have the same precedence; raises :class:`BadInput` naming
+    where each came from when they contradict each other."""
     seen: set[tuple[str, str, str | None]] = set()
     unique = []
-    for r in out:
+    for r in [*stated, *preferences]:
         if r.key() not in seen:
             seen.add(r.key())
             unique.append(r)
     conflict = consistency.check(unique).conflict
     if conflict:
-        lines = "; ".join(r.line or r.sentence() for r in conflict)
-        raise BadInput(f"preferences contradict each other: {lines}")
+        sources = {r.source for r in conflict}
+        whose = "preferences" if sources == {"preference"} else \
+            "the request's relations" if sources == {"request"} else \
+            "the request's relations and the preferences"
+        lines = "; ".join(f"{r.line or r.sentence()} ({_FROM[r.source]})" for r in conflict)
+        raise BadInput(f"{whose} contradict each other: {lines}")
     return tuple(unique)
+
+
+_FROM = {"request": "from the request", "preference": "a preference", "llm": "the LLM"}
 
 
 def covers(preferences: Sequence[Relation], items: Sequence[Item]) -> bool:
@@ -183,15 +201,18 @@ def stated_gaps(preferences: Sequence[Relation], table: Table
     return out
 
 
+class _PreferenceFile(BaseModel):
+    preferences: list[Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]]
+
+
 def load_preference_file(path: str | Path) -> tuple[str, ...]:
     """The sentences of a preferences file: YAML ``preferences: [sentence, ...]``."""
+    where = f"preferences {path}"
     try:
-        raw = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+        text = Path(path).read_bytes().decode("utf-8")
     except OSError as exc:
-        raise BadInput(f"preferences {path}: cannot read ({exc.strerror})") from None
-    except yaml.YAMLError:
-        raise BadInput(f"preferences {path}: not valid YAML") from None
-    items = raw.get("preferences") if isinstance(raw, dict) else None
-    if not isinstance(items, list) or not all(isinstance(s, str) and s.strip() for s in items):
-        raise BadInput(f"preferences {path}: preferences: expected a list of sentences")
-    return tuple(s.strip() for s in items)
+        raise BadInput(f"{where}: cannot read ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise BadInput(f"{where}: not UTF-8 (byte {exc.start})") from None
+    doc = load_yaml_model(text, where, _PreferenceFile, "preferences", "preferences")
+    return tuple(doc.preferences)

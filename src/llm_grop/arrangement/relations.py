@@ -11,6 +11,8 @@ synonyms, paraphrases, several relations per line); how, is documented in
 (an unrequested object, a self-relation, a negated relation) and the lines that
 mention an object yet yield no relation. Lines that mention no object at all
 ("Sure! Here is a typical arrangement:") are pure filler and are not listed.
+Listed lines are cut to 120 characters, and past 20 of them a last entry counts the
+rest ("… and 57 more lines"; see :mod:`~llm_grop.arrangement.answer_reader`).
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ leaves the table, or (with a tolerance) realises a stated gap or the diner's dis
 more than the tolerance away from what was said (:mod:`llm_grop.arrangement.fidelity`).
 Each configuration keeps its first surviving candidate. An object is drawn around its
 anchor's *sampled* position plus its guided offset (see
-:class:`~llm_grop.arrangement.geometry.GuidedLayout`), so that the gap to the object it
+:class:`~llm_grop.arrangement.layout.GuidedLayout`), so that the gap to the object it
 was laid out from holds wherever that one landed; an origin is drawn around its guided
 position.
 
@@ -42,7 +42,7 @@ from llm_grop.arrangement.fidelity import (
     has_gap,
     realised_gap_m,
 )
-from llm_grop.arrangement.geometry import GuidedLayout, Key
+from llm_grop.arrangement.layout import GuidedLayout, Key
 from llm_grop.arrangement.predicates import (
     Footprint,
     clear_of,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from llm_grop.arrangement.geometry import GuidedLayout
+from llm_grop.arrangement.layout import GuidedLayout
 from llm_grop.world.arrangement import Configuration
 from llm_grop.world.fidelity import Fidelity
 from llm_grop.world.relation import Relation

@@ -8,7 +8,16 @@ from typing import Any
 import click
 
 from llm_grop.cli.logs import VERBOSE
-from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
+from llm_grop.cli.options import (
+    EPILOG,
+    TABLE,
+    StagedOutputs,
+    check_outputs,
+    check_request,
+    llm_flags,
+    llm_settings,
+)
+from llm_grop.world.table import Table
 
 
 @click.command(epilog=EPILOG)
@@ -16,9 +25,7 @@ from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
 @click.argument("request", required=False)
 @click.option("--task", type=click.IntRange(1),
               help="Use the objects of the paper's Table I task N.")
-@click.option("--table", "table_size", default="0.9x0.6", show_default=True,
-              metavar="WxD|round:D",
-              help="Table top: WxD in metres, or round:D for a round top of diameter D.")
+@TABLE
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
               help="Seed for every LLM call and the sampler.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -27,20 +34,24 @@ from llm_grop.cli.options import EPILOG, check_request, llm_flags, llm_settings
               help="Write a top-down PNG of the table here.")
 @llm_flags
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
-def arrange(request: str | None, task: int | None, table_size: str, seed: int,
+def arrange(request: str | None, task: int | None, table: Table | None, seed: int,
             json_path: Path | None, image_path: Path | None, record_path: Path | None,
             catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
-    """Arrange the objects of REQUEST on the table (paper §III-A, §III-B)."""
+    """Arrange the objects of REQUEST on the table (paper §III-A, §III-B).
+
+    REQUEST is in your own words ("a mug of coffee on a coaster and the usual"): the
+    catalog matcher reads what it can, and the LLM the rest.
+    """
     from rich.console import Console
 
     from llm_grop.api import arrange as api_arrange
     from llm_grop.world.jsonio import write_json
     from llm_grop.world.serialize import arrangement_to_dict
-    from llm_grop.world.table import Table
 
     check_request("arrange", request, task)
-    table = Table.parse(table_size)
     llm_options, options = llm_settings(**flags)
+    # Every output is checked before the LLM is paid for.
+    check_outputs(json=json_path, image=image_path, record=record_path)
     out = Console()
     err = Console(stderr=True)
     with err.status("starting", spinner="dots") as status:
@@ -49,18 +60,22 @@ def arrange(request: str | None, task: int | None, table_size: str, seed: int,
                 status.update(message)
 
         result = api_arrange(request, task=task, llm=flags["backend"], llm_options=llm_options,
-                             table=table, seed=seed, catalog_files=catalog_files,
-                             options=options, record=record_path, on_event=on_event)
-    if json_path is not None:
-        write_json(json_path, arrangement_to_dict(result.arrangement))
-    if image_path is not None:
-        from llm_grop.render.table import draw_arrangement
+                             table=table if table is not None else Table(), seed=seed,
+                             catalog_files=catalog_files, options=options, record=record_path,
+                             on_event=on_event)
+    with StagedOutputs() as outputs:
+        outputs.write("json", json_path,
+                      lambda p: write_json(p, arrangement_to_dict(result.arrangement)))
+        if image_path is not None:
+            from llm_grop.render.table import draw_arrangement
 
-        draw_arrangement(result.arrangement, image_path)
+            outputs.write("image", image_path,
+                          lambda p: draw_arrangement(result.arrangement, p))
+        outputs.commit()
     if not quiet:
         from llm_grop.cli.console import print_arrangement
 
-        print_arrangement(result, out)
+        print_arrangement(result, out, err)
         for label, path in (("arrangement JSON", json_path), ("picture", image_path)):
             if path is not None:
                 out.print(f"Wrote {label}: {path}")

@@ -15,10 +15,12 @@ from llm_grop.cli.options import (
     FIDELITY_WEIGHT,
     SIMULATOR,
     TABLE,
+    check_out_dir,
     llm_flags_without_record,
     llm_settings,
 )
 from llm_grop.errors import BadInput
+from llm_grop.world.table import Table
 
 
 def parse_tasks(text: str, known: dict[int, Any]) -> tuple[int, ...]:
@@ -121,7 +123,7 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 @llm_flags_without_record
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
-          seed: int, scene_path: Path | None, chairs: int | None, table_text: str | None,
+          seed: int, scene_path: Path | None, chairs: int | None, table: Table | None,
           simulator: str, feasibility: str, w: float, fidelity_w: float,
           task_files: tuple[Path, ...], no_images: bool,
           catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
@@ -136,6 +138,7 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
         TimeRemainingColumn,
     )
 
+    from llm_grop.cli.console import print_warnings
     from llm_grop.experiment.runner import Experiment, run_experiment, write_reports
     from llm_grop.experiment.summary import print_summary
     from llm_grop.experiment.trial import TrialSettings
@@ -145,9 +148,12 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.world.contract import TrialRow
     from llm_grop.world.scene_file import load_scene, set_target_top
-    from llm_grop.world.table import Table
     from llm_grop.world.tasks import load_tasks
 
+    check_out_dir("out", out_dir)  # before any model is loaded or trial run
+    if not no_images and (out_dir / "images").exists() and not (out_dir / "images").is_dir():
+        raise BadInput(f"--out {out_dir}: {out_dir / 'images'} is a file, where each "
+                       f"trial's picture goes; remove it or pass --no-images")
     known = load_tasks(task_files)
     tasks = parse_tasks(tasks_text, known)
     methods = parse_methods(methods_text)
@@ -165,10 +171,10 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     else:
         BACKENDS.get(backend)
     scene = load_scene(scene_path)  # a bad scene is reported before any trial runs
-    if table_text is not None:
-        top = Table.parse(table_text)
-        scene = set_target_top(scene, top, keep_chairs=chairs is None)
-        table_text = top.text  # one spelling per table in the experiment's identity
+    table_text = None
+    if table is not None:
+        scene = set_target_top(scene, table, keep_chairs=chairs is None)
+        table_text = table.text  # one spelling per table in the experiment's identity
     _check_tasks(tasks, known, options, catalog_files, sim, scene)
     settings = TrialSettings(
         backend=backend, llm_options=llm_options, arrange=options,
@@ -192,6 +198,9 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     def on_row(row: TrialRow) -> None:
         progress.update(bar, advance=1, description=(
             f"task {row.task} trial {row.trial} {row.method}: rating {row.rating}"))
+        if not quiet and row.planned is not None:
+            print_warnings(row.planned.warnings, console,
+                           f"task {row.task} trial {row.trial} {row.method}")
 
     t0 = time.perf_counter()
     with progress:

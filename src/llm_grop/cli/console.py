@@ -2,17 +2,45 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 from rich.console import Console
 from rich.table import Table as RichTable
+from rich.text import Text
 
 from llm_grop.arrangement.pipeline import ArrangementResult
 from llm_grop.world.plan import ExecutedStep, RunResult
 
+#: The longest warning line printed, in characters; a longer warning is cut with "…" (the
+#: JSON keeps it whole).
+WARNING_CHARS = 200
 
-def print_arrangement(result: ArrangementResult, console: Console) -> None:
-    """Relations, conflicts found and resolved, warnings and positions of ``result``."""
+
+def one_line(text: str, limit: int = WARNING_CHARS) -> str:
+    """``text`` on one line (runs of white space, newlines too, become one space), cut to
+    ``limit`` characters with a trailing "…"."""
+    flat = " ".join(text.split())
+    return flat if len(flat) <= limit else flat[:limit - 1].rstrip() + "…"
+
+
+def print_warnings(warnings: Iterable[str], console: Console, where: str = "") -> None:
+    """Each warning as one line ``warning: [where: ]text`` on ``console`` (stderr), cut
+    to :data:`WARNING_CHARS` characters; never rich markup, never wrapped."""
+    for w in warnings:
+        line = Text("warning:", style="yellow")
+        line.append(" " + one_line(f"{where}: {w}" if where else w))
+        console.print(line, soft_wrap=True, highlight=False)
+
+
+def print_arrangement(result: ArrangementResult, console: Console,
+                      err: Console | None = None) -> None:
+    """Relations, conflicts found and resolved, warnings and positions of ``result``.
+
+    Warnings go to ``err`` (stderr), else to ``console``, one line each.
+    """
     a = result.arrangement
-    console.print(f"[bold]Request:[/bold] {a.request}")
+    # The request is the user's text: never rich markup.
+    console.print(Text.assemble(("Request:", "bold"), f" {a.request}"))
     size = (f"round, {a.table.width:g} m across" if a.table.is_round
             else f"{a.table.width:g} x {a.table.depth:g} m")
     seats = f", {len(a.table.diners)} diners" if len(a.table.diners) > 1 else ""
@@ -35,10 +63,11 @@ def print_arrangement(result: ArrangementResult, console: Console) -> None:
     rel_table.add_column("relation")
     rel_table.add_column("reference")
     rel_table.add_column("gap (cm)", justify="right")
+    rel_table.add_column("from")
     for r in a.relations:
         gap = result.gaps_m.get(r.key())
         rel_table.add_row(r.subject, r.relation, r.reference or "table",
-                          "" if gap is None else f"{gap * 100:.1f}")
+                          "" if gap is None else f"{gap * 100:.1f}", r.source)
     console.print(rel_table)
 
     pos_table = RichTable(title=f"Positions (m), configuration 1 of "
@@ -48,18 +77,18 @@ def print_arrangement(result: ArrangementResult, console: Console) -> None:
     for p in a.placements:
         pos_table.add_row(p.name, f"{p.x:+.3f}", f"{p.y:+.3f}", f"{p.yaw:.2f}", p.on or "table")
     console.print(pos_table)
-    for w in a.warnings:
-        console.print(f"[yellow]warning:[/yellow] {w}")
+    print_warnings(a.warnings, err or console)
     if a.llm is not None:
         latency = sum(c.latency_s for c in a.llm.calls)
         console.print(f"LLM: {a.llm.backend} / {a.llm.model}, {len(a.llm.calls)} calls, "
                       f"{latency:.1f} s")
 
 
-def print_run(result: RunResult, console: Console) -> None:
-    """The episode's outcome: success, times, the plan and each object's actions."""
+def print_run(result: RunResult, console: Console, err: Console | None = None) -> None:
+    """The episode's outcome: success, times, the plan and each object's actions, and the
+    planned arrangement's warnings on ``err`` (stderr), else on ``console``."""
     ex, plan = result.execution, result.plan
-    console.print(f"[bold]Request:[/bold] {result.request}")
+    console.print(Text.assemble(("Request:", "bold"), f" {result.request}"))
     console.print(f"[bold]Method:[/bold] {result.method}   [bold]seed:[/bold] {result.seed}   "
                   f"[bold]chairs sensed:[/bold] {len(result.scene.chairs)}")
     console.print(f"Plan: configuration {plan.configuration_index + 1} of "
@@ -84,6 +113,7 @@ def print_run(result: RunResult, console: Console) -> None:
     console.print(f"Result: {verdict}; execution time {ex.execution_time_s:.1f} s (simulated); "
                   f"planning time {result.planning_time_s * 1000:.0f} ms; "
                   f"failures {ex.failures}")
+    print_warnings(result.planned.warnings, err or console)
     if result.planned.llm is not None:
         llm = result.planned.llm
         latency = sum(c.latency_s for c in llm.calls)

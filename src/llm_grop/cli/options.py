@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import os
+import secrets
 from collections.abc import Callable
 from pathlib import Path
+from types import TracebackType
 from typing import Any, TypeVar
 
 import click
@@ -12,6 +14,7 @@ import click
 from llm_grop.errors import BadInput
 from llm_grop.llm.registry import BACKENDS
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR
+from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
 
 EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
 
@@ -56,20 +59,151 @@ _LLM_OPTIONS = [
 ]
 
 
+#: The suffix each picture or video flag's file must have (the format its writer makes),
+#: and what to say when it has another.
+OUTPUT_SUFFIXES: dict[str, tuple[str, str]] = {
+    "image": (".png", "only PNG pictures are made; use a name ending in .png"),
+    "table_image": (".png", "only PNG pictures are made; use a name ending in .png"),
+    "room_image": (".png", "only PNG pictures are made; use a name ending in .png"),
+    "video": (".mp4", "the video must be an .mp4 file"),
+}
+
+
+def _flag(keyword: str) -> str:
+    """The flag a keyword stands for: ``table_image`` -> ``--table-image``."""
+    return "--" + keyword.replace("_", "-")
+
+
 def check_outputs(**paths: Path | None) -> None:
     """:class:`BadInput` for an output path (keyword: its flag, ``_`` for ``-``) that cannot
-    be written, before any work is spent."""
+    be written, before any work is spent: a directory, a file that is not writable, a
+    directory that does not exist or is not writable, or a picture or video whose name
+    does not end in its format's suffix (:data:`OUTPUT_SUFFIXES`)."""
     for flag, path in paths.items():
-        if path is None:
-            continue
-        name = "--" + flag.replace("_", "-")
-        parent = path.resolve().parent
-        if path.is_dir():
-            raise BadInput(f"{name} {path}: is a directory; give a file name")
-        if not parent.is_dir():
-            raise BadInput(f"{name} {path}: directory {parent} does not exist")
-        if not os.access(parent, os.W_OK):
-            raise BadInput(f"{name} {path}: directory {parent} is not writable")
+        if path is not None:
+            _checked(_check_output, flag, path)
+
+
+def _checked(check: Callable[[str, Path], None], flag: str, path: Path) -> None:
+    """``check(flag, path)``, an operating system's complaint about the path (a name too
+    long, a loop of links) made a :class:`BadInput` naming the flag."""
+    try:
+        check(flag, path)
+    except (OSError, RuntimeError) as exc:
+        words = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise BadInput(f"{_flag(flag)} {path}: {words}") from None
+
+
+def _check_output(flag: str, path: Path) -> None:
+    """:func:`check_outputs` for one ``path``, given with the flag keyword ``flag``."""
+    name = _flag(flag)
+    parent = path.resolve().parent
+    if path.is_dir():
+        raise BadInput(f"{name} {path}: is a directory; give a file name")
+    if flag in OUTPUT_SUFFIXES:
+        suffix, words = OUTPUT_SUFFIXES[flag]
+        if path.suffix.lower() != suffix:
+            raise BadInput(f"{name} {path}: {words}")
+    if not parent.is_dir():
+        raise BadInput(f"{name} {path}: directory {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise BadInput(f"{name} {path}: directory {parent} is not writable")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise BadInput(f"{name} {path}: the file is not writable")
+
+
+def check_out_dir(flag: str, path: Path) -> None:
+    """:class:`BadInput` unless ``path`` is, or can be made, a writable directory (``flag``
+    names it in the message): checked before any work is spent."""
+    _checked(_check_dir, flag, path)
+
+
+def _check_dir(flag: str, path: Path) -> None:
+    """:func:`check_out_dir` for ``path``, given with the flag keyword ``flag``."""
+    name = _flag(flag)
+    if path.exists():
+        if not path.is_dir():
+            raise BadInput(f"{name} {path}: is a file; give a directory")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise BadInput(f"{name} {path}: directory is not writable")
+        return
+    ancestor = path.resolve().parent
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise BadInput(f"{name} {path}: {ancestor} is a file, so the directory cannot be made")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise BadInput(f"{name} {path}: cannot be made, {ancestor} is not writable")
+
+
+#: How much of an output's name and suffix its temporary file's name keeps (characters),
+#: so that it stays within a file system's 255 bytes.
+_STEM_CHARS = 48
+_SUFFIX_CHARS = 16
+
+
+class StagedOutputs:
+    """The files a command writes after its work, written all or none.
+
+    :meth:`path` gives a temporary name beside each output (hidden, with the output's
+    suffix, so the writer's format check still holds); :meth:`write` writes one there,
+    and a failure is reported naming the output's flag and path. :meth:`commit` moves
+    every written file into place; leaving the ``with`` block without a commit removes
+    the temporary files. A user's existing file is replaced only at the commit, so a
+    failure never loses it, and never leaves half a set of outputs.
+    """
+
+    def __init__(self) -> None:
+        self._staged: dict[Path, tuple[str, Path]] = {}
+
+    def __enter__(self) -> StagedOutputs:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.discard()
+
+    def path(self, flag: str, final: Path) -> Path:
+        """A fresh temporary path beside ``final``, moved to ``final`` at the commit."""
+        # Short whatever the output's name, and with its suffix (a format check reads it).
+        suffix = final.suffix if len(final.suffix) <= _SUFFIX_CHARS else ""
+        tmp = final.with_name(f".{final.stem[:_STEM_CHARS]}.{os.getpid()}-"
+                              f"{secrets.token_hex(4)}.part{suffix}")
+        self._staged[final] = (flag, tmp)
+        return tmp
+
+    def write(self, flag: str, final: Path | None, writer: Callable[[Path], object]) -> None:
+        """``writer(tmp)`` for the output ``final`` (nothing when ``None``); its failure is
+        a :class:`BadInput` that names ``flag`` and ``final``, not the temporary file."""
+        if final is None:
+            return
+        tmp = self.path(flag, final)
+        try:
+            writer(tmp)
+        except OSError as exc:
+            raise BadInput(f"{_flag(flag)} {final}: cannot write ({exc.strerror or exc})") \
+                from None
+        except BadInput as exc:
+            raise BadInput(f"{_flag(flag)}: {str(exc).replace(str(tmp), str(final))}") \
+                from None
+
+    def commit(self) -> None:
+        """Move every written file into place."""
+        for final, (flag, tmp) in list(self._staged.items()):
+            if not tmp.exists():
+                continue
+            try:
+                os.replace(tmp, final)
+            except OSError as exc:
+                raise BadInput(f"{_flag(flag)} {final}: cannot write ({exc.strerror})") \
+                    from None
+            del self._staged[final]
+
+    def discard(self) -> None:
+        """Remove the temporary files not yet committed (never a user's own file)."""
+        for _, tmp in self._staged.values():
+            tmp.unlink(missing_ok=True)
+        self._staged.clear()
 
 
 FEASIBILITY = click.option(
@@ -84,11 +218,19 @@ FIDELITY_WEIGHT = click.option(
          "missed, the setting's shift); 0 ignores fidelity.")
 
 
-#: ``--table`` of the commands that run in the dining room: the target table's top.
+def _parse_table(ctx: click.Context, param: click.Parameter, text: str | None) -> Table | None:
+    """``--table``'s text as a :class:`Table` (checked as the flags are read)."""
+    return None if text is None else Table.parse(text)
+
+
+#: ``--table`` of ``arrange``, ``run`` and ``bench``: the target table's top, a
+#: :class:`~llm_grop.world.table.Table` (``None``: the command's default).
 TABLE = click.option(
-    "--table", "table_text", metavar="WxD|round:D",
-    help="Replace the target table's top: WxD in metres (0.9x0.6) or round:D, a round "
-         "top of diameter D (round:1.2) [default: the scene's].")
+    "--table", "table", metavar="WxD|round:D", callback=_parse_table,
+    help=f"The target table's top: WxD such as 120x80cm, 1.2x0.8m or 1200x800mm (a bare "
+         f"number is metres: 0.9x0.6), or round:D, a round top of diameter D such as "
+         f"round:120cm; each side {MIN_TABLE_SIDE_M:g} to {MAX_TABLE_SIDE_M:g} m "
+         f"[default: arrange 0.9x0.6 m; run and bench the scene's].")
 
 
 SIMULATOR = click.option(

@@ -14,12 +14,14 @@ from llm_grop.cli.options import (
     FIDELITY_WEIGHT,
     SIMULATOR,
     TABLE,
+    StagedOutputs,
     check_outputs,
     check_request,
     llm_flags,
     llm_settings,
 )
 from llm_grop.errors import BadInput
+from llm_grop.world.table import Table
 
 
 @click.command(epilog=EPILOG)
@@ -54,7 +56,7 @@ from llm_grop.errors import BadInput
 @llm_flags
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
-        chairs: int | None, table_text: str | None, simulator: str, feasibility: str,
+        chairs: int | None, table: Table | None, simulator: str, feasibility: str,
         w: float, fidelity_w: float,
         json_path: Path | None,
         image_path: Path | None, table_image: Path | None, room_image: Path | None,
@@ -68,40 +70,45 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
     from llm_grop.planning.utility import GropOptions
     from llm_grop.world.jsonio import write_json
     from llm_grop.world.run_json import run_to_dict
-    from llm_grop.world.table import Table
 
     check_request("run", request, task)
-    table = Table.parse(table_text) if table_text is not None else None
     llm_options, options = llm_settings(**flags)
+    # Every output is checked before the LLM is paid for or any planning is done.
     check_outputs(json=json_path, image=image_path, table_image=table_image,
-                  room_image=room_image, video=video_path)
-    sim = _simulator(simulator, table_image or room_image or video_path, video_path)
+                  room_image=room_image, video=video_path, record=record_path)
     err = Console(stderr=True)
-    with err.status("starting", spinner="dots") as status:
-        def on_event(message: str) -> None:
-            if not quiet:
-                status.update(message)
+    with StagedOutputs() as outputs:
+        # The video is recorded beside its place and moved there with the other outputs.
+        video_tmp = outputs.path("video", video_path) if video_path is not None else None
+        sim = _simulator(simulator, table_image or room_image or video_path, video_tmp)
+        with err.status("starting", spinner="dots") as status:
+            def on_event(message: str) -> None:
+                if not quiet:
+                    status.update(message)
 
-        result = api_run(request, task=task, method=method, scene=scene_path, chairs=chairs,
-                         table=table, seed=seed, llm=flags["backend"], llm_options=llm_options,
-                         catalog_files=catalog_files, options=options, record=record_path,
-                         planner=GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w),
-                         simulator=sim, feasibility=feasibility,
-                         on_event=on_event)
-    if json_path is not None:
-        write_json(json_path, run_to_dict(result))
-    if image_path is not None:
-        from llm_grop.render.room import draw_run
+            result = api_run(request, task=task, method=method, scene=scene_path,
+                             chairs=chairs, table=table, seed=seed, llm=flags["backend"],
+                             llm_options=llm_options, catalog_files=catalog_files,
+                             options=options, record=record_path,
+                             planner=GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w),
+                             simulator=sim, feasibility=feasibility,
+                             on_event=on_event)
+        outputs.write("json", json_path, lambda p: write_json(p, run_to_dict(result)))
+        if image_path is not None:
+            from llm_grop.render.room import draw_run
 
-        draw_run(result, image_path)
-    for view, path in (("table", table_image), ("room", room_image)):
-        if path is not None:
-            from llm_grop.render.raster import save_rgb_png
+            outputs.write("image", image_path, lambda p: draw_run(result, p))
+        for flag, view, path in (("table_image", "table", table_image),
+                                 ("room_image", "room", room_image)):
+            if path is not None:
+                from llm_grop.render.raster import save_rgb_png
 
-            save_rgb_png(sim.picture(view), path)  # type: ignore[union-attr]
+                picture = sim.picture(view)  # type: ignore[union-attr]
+                outputs.write(flag, path, lambda p, image=picture: save_rgb_png(image, p))
+        outputs.commit()
     if not quiet:
         out = Console()
-        print_run(result, out)
+        print_run(result, out, err)
         for label, path in (("run JSON", json_path), ("picture", image_path),
                             ("table render", table_image), ("room render", room_image),
                             ("video", video_path)):

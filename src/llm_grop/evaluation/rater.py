@@ -40,7 +40,7 @@ from llm_grop.world.request import parse_request
 from llm_grop.world.serialize import read_doc
 
 #: The arrangement JSON's fields the rater reads.
-_RATED = ("request", "table", "objects")
+_RATED = ("request", "table", "objects", "request_read_by")
 
 #: What each score means (Table III of the paper, shortened).
 SCORE_MEANING = {
@@ -146,11 +146,13 @@ def rate(arrangement: Mapping[str, Any] | ArrangementDoc, requested: Sequence[st
     assigned: list[tuple[str, int | None]] | None = None
     if requested is not None:
         kinds = requested_kinds(requested, catalog)
-    elif doc.request.strip():
+    elif doc.request.strip() and doc.request_read_by != "llm":
         parsed = parse_request(doc.request, catalog).items
         kinds = tuple(i.kind for i in parsed)
         assigned = [(i.kind, i.diner) for i in parsed]
     else:
+        # An LLM read (part of) this request; without it, the objects on the table are
+        # what was asked for.
         kinds = None
     if several_diners(doc):
         return _rate_diners(doc, kinds, assigned, catalog, conv, where)

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from llm_grop.llm.record import LLMCallRecord, append_record
 
@@ -60,6 +61,11 @@ class LLM(Protocol):
     ``complete`` sends ``prompt`` as one user message and returns the call's record.
     ``grammar`` is an optional GBNF grammar that constrains the output; backends
     that cannot enforce one ignore it.
+
+    A backend that can constrain its output to a JSON Schema says so with a true
+    ``accepts_schema`` attribute; :class:`CallLog` then passes the schema as the keyword
+    ``schema`` (a JSON Schema object). The prompt still asks for a format that reads
+    without it, for servers that turn structured output down.
     """
 
     backend: str
@@ -93,11 +99,17 @@ class CallLog:
     def model(self) -> str:
         return self.llm.model
 
-    def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
-                 ) -> LLMCallRecord:
+    def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None,
+                 schema: Mapping[str, Any] | None = None) -> LLMCallRecord:
+        """The backend's answer to ``prompt``, kept and recorded; ``schema`` (a JSON Schema
+        for the answer) reaches only backends that accept one."""
         t0 = time.perf_counter()
         try:
-            record = self.llm.complete(prompt, params, grammar)
+            if schema is not None and getattr(self.llm, "accepts_schema", False):
+                record = self.llm.complete(prompt, params, grammar,
+                                           schema=schema)  # type: ignore[call-arg]
+            else:
+                record = self.llm.complete(prompt, params, grammar)
             self.calls.append(record)
             log.debug("%s call, seed %s: %.2f s, %s completion tokens", record.backend,
                       record.seed, record.latency_s, record.completion_tokens)

@@ -69,7 +69,9 @@ def load_records(path: Path) -> list[LLMCallRecord]:
     except OSError as exc:
         raise LLMError(f"{path}: cannot read replay file: {exc.strerror or exc}") from None
     records = []
-    for number, line in enumerate(text.splitlines(), start=1):
+    # Records are separated by "\n" alone: str.splitlines() would also split inside a
+    # response at "\x85" or "\u2028", which JSON keeps as they are (ensure_ascii=False).
+    for number, line in enumerate(text.split("\n"), start=1):
         if line.strip():
             records.append(_parse_line(path, number, line))
     return records

@@ -28,6 +28,7 @@ from llm_grop.llm.base import CallLog
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.fidelity import Fidelity
+from llm_grop.world.request import Request
 from llm_grop.world.table import Table
 
 
@@ -44,6 +45,8 @@ class EpisodeInput:
     llm: CallLog | None = None
     options: ArrangeOptions = ArrangeOptions()
     on_event: Callable[[str], None] | None = None
+    #: How the request was read: the relations it states and the LLM calls that read it.
+    reading: Request | None = None
 
 
 @dataclass(frozen=True)
@@ -94,8 +97,9 @@ class ComposedMethod:
             if inp.llm is None:
                 raise BadInput(f"method {self.name!r} needs an LLM")
             before = inp.llm.wall_s
-            result = arrange_items(inp.request, inp.items, inp.llm, inp.catalog, inp.table,
-                                   inp.seed, inp.options, inp.on_event)
+            result = arrange_items(inp.reading or inp.request, inp.items, inp.llm,
+                                   inp.catalog, inp.table, inp.seed, inp.options,
+                                   inp.on_event)
             llm_s = inp.llm.wall_s - before
             return Proposal(result.arrangement, result.configurations,
                             max(time.perf_counter() - t0 - llm_s, 0.0), result.fidelity)

@@ -85,3 +85,5 @@ class Arrangement:
     llm: LLMSummary | None = None
     warnings: tuple[str, ...] = ()
     conflicts: tuple[tuple[Relation, ...], ...] = field(default=())
+    #: How the request's objects were read: ``"catalog"``, ``"llm"``, or ``None`` unknown.
+    read_by: str | None = None

@@ -1,7 +1,9 @@
 """The object catalog: shapes, footprints, heights and synonyms of table objects.
 
 The package ships ``data/catalog.yaml``; users extend it with files of their own
-(same layout), which may add objects or override packaged ones by name.
+(same layout), which may add objects or override packaged ones by name (a later file
+wins). Within one file, every name and synonym must be unique: two entries with the same
+name, or a name or synonym that another entry of the file already uses, are refused.
 """
 
 from __future__ import annotations
@@ -123,8 +125,16 @@ class Catalog:
                 text = Path(path).read_text(encoding="utf-8")
             except OSError as exc:
                 raise CatalogError(f"catalog {path}: cannot read ({exc.strerror})") from None
+            except UnicodeDecodeError:
+                raise CatalogError(f"catalog {path}: cannot read (not UTF-8 text)") from None
             specs += _parse(text, f"catalog {path}")
         return cls(specs)
+
+    @classmethod
+    def from_text(cls, text: str, where: str = "catalog") -> Catalog:
+        """The objects of one catalog file's YAML ``text`` alone (no packaged ones); errors
+        are :class:`CatalogError` naming ``where``."""
+        return cls(_parse(text, where))
 
     @property
     def specs(self) -> Mapping[str, ObjectSpec]:
@@ -184,4 +194,35 @@ def _parse(text: str, where: str) -> list[ObjectSpec]:
                                "a circle needs size [d, d]")
         specs.append(ObjectSpec(name, obj.shape, (float(obj.size[0]), float(obj.size[1])),
                                 float(obj.height), tuple(obj.synonyms)))
+    _check_unique(model.objects, specs, where)
     return specs
+
+
+def _check_unique(objects: Sequence[_ObjectModel], specs: Sequence[ObjectSpec], where: str
+                  ) -> None:
+    """Raises :class:`CatalogError` for the first name or synonym (normalised) that two
+    entries of one file share, naming both entries; within one entry repeats are harmless."""
+    # Normalised name or synonym -> (entry index, whether it is that entry's name).
+    used: dict[str, tuple[int, bool]] = {}
+
+    def taken(text: str, j: int, is_name: bool) -> str:
+        kind = "the name" if is_name else "a synonym"
+        return f"{text!r} is already {kind} of objects[{j}] ({objects[j].name!r})"
+
+    for i, (obj, spec) in enumerate(zip(objects, specs, strict=True)):
+        label = f"{where}: objects[{i}] ({obj.name!r})"
+        j, is_name = used.get(spec.name, (i, True))
+        if j != i and is_name:
+            raise CatalogError(f"{label}: duplicate name; objects[{j}] is already "
+                               f"{spec.name!r}")
+        if j != i:
+            raise CatalogError(f"{label}: name {taken(spec.name, j, is_name)}")
+        used[spec.name] = (i, True)
+        for synonym in obj.synonyms:
+            alias = normalize_name(synonym)
+            if not alias:
+                continue  # names nothing ("!!"): lookups never reach it
+            j, is_name = used.get(alias, (i, False))
+            if j != i:
+                raise CatalogError(f"{label}.synonyms: {taken(synonym, j, is_name)}")
+            used.setdefault(alias, (i, False))

@@ -109,6 +109,9 @@ class RelationDoc(Doc):
     relation: RelationName
     reference: Name | None
     line: Text | None = None
+    source: Literal["llm", "preference", "request"] | None = Field(
+        None, description="where the relation came from: the LLM's answer, a stated "
+                          "preference, or the request's own words")
 
 
 class LLMCallDoc(Doc):
@@ -145,6 +148,9 @@ class ArrangementDoc(Doc):
     warnings: list[Text] = Field([], description="what the pipeline dropped or assumed")
     conflicts: list[list[RelationDoc]] = Field(
         [], description="per rejected LLM answer, the minimal set of conflicting lines")
+    request_read_by: Literal["catalog", "llm"] | None = Field(
+        None, description="how the request's objects were read: by the catalog matcher "
+                          "alone, or with an LLM for what the matcher could not read")
 
 
 class StepDoc(Doc):

@@ -26,6 +26,11 @@ def load_yaml_model(text: str, where: str, model: type[M], top_key: str, label_k
         mark = getattr(exc, "problem_mark", None)
         at = f" line {mark.line + 1}" if mark is not None else ""
         raise error(f"{where}{at}: not valid YAML") from None
+    except (ValueError, LookupError, AttributeError, TypeError, OverflowError, RecursionError):
+        # PyYAML's constructors raise these for a tagged scalar they cannot convert
+        # ("!!int 0x", "!!bool maybe", "!!timestamp x", "!!float"), and Python for nesting
+        # deeper than its stack.
+        raise error(f"{where}: not valid YAML (a value cannot be read)") from None
     if not isinstance(raw, dict):
         raise error(f"{where}: top level: expected a mapping with a {top_key!r} list")
     return validated(model, raw, where, label_key, error)
@@ -72,6 +77,9 @@ def field_path(raw: Any, loc: tuple[int | str, ...], label_key: str) -> str:
                         else f" ({node[label_key]!r})"
             parts.append(label)
         else:
-            parts.append(f".{key}" if parts else str(key))
+            # A key that is not plain text (a line break, a control character) is quoted,
+            # so that the message stays on one line.
+            text = str(key) if str(key).isprintable() else repr(key)
+            parts.append(f".{text}" if parts else text)
             node = node.get(key) if isinstance(node, dict) else None
     return "".join(parts) or "top level"

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -11,6 +14,9 @@ from llm_grop.errors import BadInput
 
 #: Decimal places kept for metres and radians in JSON (0.1 mm).
 _DIGITS = 4
+#: How much of a file's name its temporary file's name keeps (characters), so that it
+#: stays within a file system's 255 bytes.
+_TMP_NAME_CHARS = 48
 
 
 def rounded(value: float) -> float:
@@ -24,12 +30,42 @@ def dumps(data: Mapping[str, Any]) -> str:
 
 
 def write_json(path: str | Path, data: Mapping[str, Any]) -> None:
-    """Write ``data`` atomically, so a failure never leaves half a file."""
+    """Write ``data`` to ``path`` atomically: to a new temporary file beside it, then
+    renamed over it, so a failure never leaves half a file nor loses the one there.
+
+    The file gets the mode of the file it replaces, else the usual one (``0o666`` less
+    the umask). Raises :class:`BadInput` (one line, naming ``path``) if it cannot be
+    written.
+    """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
+    text = dumps(data)  # a value JSON cannot hold fails here, before any file is touched
     try:
-        tmp.write_text(dumps(data), encoding="utf-8")
-        tmp.replace(path)
+        fd, name = tempfile.mkstemp(prefix=f".{path.name[:_TMP_NAME_CHARS]}.", suffix=".tmp",
+                                    dir=path.parent)
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot write ({exc.strerror or exc})") from None
+    tmp = Path(name)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, _mode_for(path))
+        os.replace(tmp, path)
     except OSError as exc:
         tmp.unlink(missing_ok=True)
-        raise BadInput(f"{path}: cannot write ({exc.strerror})") from None
+        raise BadInput(f"{path}: cannot write ({exc.strerror or exc})") from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _mode_for(path: Path) -> int:
+    """The permission bits a file written to ``path`` gets: those of the file it replaces,
+    else ``0o666`` less the process's umask."""
+    try:
+        return stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask

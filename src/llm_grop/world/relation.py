@@ -40,6 +40,10 @@ DIRECTION: dict[str, tuple[int, int]] = {
 #: Relations that stack one object on another.
 STACKING = frozenset({ON_TOP_OF, UNDER})
 
+#: Where a relation came from: the LLM's answer, a preference the user stated
+#: (``--prefer`` or a preferences file), or the request's own words ("a mug on a coaster").
+SOURCES: tuple[str, ...] = ("llm", "preference", "request")
+
 
 @dataclass(frozen=True)
 class Relation:
@@ -47,18 +51,22 @@ class Relation:
 
     ``reference`` is ``None`` for ``center`` (the subject is at the table's centre).
     ``line`` is the LLM's text the relation was read from, or ``""`` when stated by a user.
+    ``source`` is one of :data:`SOURCES`.
     """
 
     subject: str
     relation: str
     reference: str | None
     line: str = ""
+    source: str = "llm"
 
     def __post_init__(self) -> None:
         if self.relation not in RELATION_NAMES:
             raise ValueError(f"unknown relation {self.relation!r}")
         if (self.relation == CENTER) != (self.reference is None):
             raise ValueError("'center' takes no reference; every other relation needs one")
+        if self.source not in SOURCES:
+            raise ValueError(f"unknown relation source {self.source!r}")
 
     def sentence(self) -> str:
         """The relation as a Template 1 line: ``Place the X to the left of the Y.``"""
@@ -70,7 +78,8 @@ class Relation:
         """The same fact said from the reference's side (not defined for ``center``)."""
         if self.reference is None:
             raise ValueError("'center' has no converse")
-        return Relation(self.reference, CONVERSE[self.relation], self.subject, self.line)
+        return Relation(self.reference, CONVERSE[self.relation], self.subject, self.line,
+                        self.source)
 
     def key(self) -> tuple[str, str, str | None]:
         """``(subject, relation, reference)`` without the source line."""

@@ -1,13 +1,15 @@
-"""Natural-language requests: which catalog objects a user asks for, and how many.
+"""Natural-language requests: which catalog objects a user asks for, how many, and the
+relations the request itself states.
 
 A request such as "set the table with a plate, two forks and a knife" becomes the
 items ``dinner plate``, ``dinner fork``, ``dinner fork 2``, ``dinner knife``.
 
-How a request is read:
+How a request is read (the catalog matcher; the vocabulary is
+:mod:`llm_grop.world.request_words`):
 
 * Words are matched against the catalog's names, synonyms and plurals, longest
   match first ("dinner knife" over "knife", "mug lid" over "mug").
-* A count may precede an object: digits, ``one`` to ``twenty``, ``thirty``,
+* A count may precede an object: ASCII digits, ``one`` to ``twenty``, ``thirty``,
   ``a``/``an``, ``a couple of``, ``a pair of`` (2; "a pair of forks" is two
   dinner forks), ``a dozen``. Without a count an object counts once. A plural
   without a count ("strawberries", "some strawberries") is refused with a request
@@ -17,10 +19,16 @@ How a request is read:
   with", "I'd like", "for dinner", "its") are ignored, and so is a possessive
   "'s" ("the mug's lid" is the mug lid); commas, "and", "with", "plus" and "&"
   separate objects. "or" is refused: the request must say exactly what to set.
-* Any other word is taken as (part of) an object name the catalog does not know,
-  and the request is refused with :class:`UnknownObject` and suggestions.
-  Adjectives are not special: "a blue mug" is refused as the unknown object
-  'blue mug' (did you mean 'mug'?), because the pipeline cannot honour them.
+* What an object holds is not an object: "a glass of water", "a mug of coffee".
+* A relation phrase between two objects states their relation: "a mug on a coaster"
+  (the mug on top of the mug mat), "the fork to the left of the plate", "a bowl in the
+  middle". These become :attr:`Request.relations`, with ``source="request"``.
+* Any other words are a chunk the matcher cannot account for (:class:`Unread`).
+  :func:`parse_request` refuses them with :class:`UnknownObject` and suggestions;
+  :func:`read_request` returns them, so that an LLM can be asked what they mean
+  (:mod:`llm_grop.arrangement.understanding`). Adjectives are not special: "a blue mug"
+  is the unread chunk 'blue mug' (did you mean 'mug'?), because the pipeline cannot
+  honour them.
 
 Items keep the order in which their kind is first mentioned; repeated mentions add
 instances ("a fork ... and another fork" gives two dinner forks).
@@ -33,80 +41,103 @@ gets one (:func:`for_diners`): the second diner's plate is "dinner plate 2".
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
-from llm_grop.errors import BadInput, UnknownObject
+from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item
-from llm_grop.world.catalog import Catalog, ObjectSpec, singular_forms
+from llm_grop.world.catalog import Catalog, ObjectSpec
+from llm_grop.world.llmlog import CallRecord
+from llm_grop.world.relation import CENTER, Relation
+from llm_grop.world.request_reader import (
+    MAX_OBJECTS,
+    MatchReader,
+    Mention,
+    Unread,
+    is_number,
+    normalized,
+    tokens,
+)
+from llm_grop.world.request_words import NUMBERS
 
-#: Most objects one request may ask for (all kinds together).
-MAX_OBJECTS = 30
+#: Most diners one request may set the table for.
+MAX_DINERS = 12
 
+#: Longest request read, in characters: a request is a sentence or two, and reading
+#: (and an LLM prompt built from it) must stay cheap.
+MAX_REQUEST_CHARS = 2000
+
+_SURROGATE = re.compile("[\ud800-\udfff]")
 _EXAMPLE = "e.g. 'a dinner plate, a dinner fork and a dinner knife'"
-
-_NUMBERS: dict[str, int] = {
-    "one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7,
-    "eight": 8, "nine": 9, "ten": 10, "eleven": 11, "twelve": 12, "thirteen": 13,
-    "fourteen": 14, "fifteen": 15, "sixteen": 16, "seventeen": 17, "eighteen": 18,
-    "nineteen": 19, "twenty": 20, "thirty": 30,
-}
-
-
-def _phrases(*texts: str) -> tuple[tuple[str, ...], ...]:
-    return tuple(tuple(t.split()) for t in texts)
-
-
-# Phrases that count the next object. Articles also count 1, but may dangle harmlessly.
-_COUNT_PHRASES: dict[tuple[str, ...], int] = {
-    **{(w,): n for w, n in _NUMBERS.items()},
-    ("a",): 1, ("an",): 1, ("another",): 1, ("single",): 1, ("a", "single"): 1,
-    ("a", "couple", "of"): 2, ("couple", "of"): 2, ("a", "pair", "of"): 2, ("pair", "of"): 2,
-    ("a", "dozen"): 12, ("dozen",): 12,
-}
-_ARTICLES = _phrases("a", "an", "one", "another")
-# Quantities that name no number: a plural after them still needs one.
-_VAGUE = _phrases("some", "a few", "few", "several", "many", "a lot of", "lots of",
-                  "a bunch of", "more", "any", "extra", "a number of")
-_FILLERS = _phrases(
-    "for dinner", "for breakfast", "for lunch", "for supper", "for brunch", "for one",
-    "for one person", "on the table", "at the table", "place setting", "thank you", "if you can",
-    "if possible", "set up",
-) + tuple((w,) for w in (
-    "please", "kindly", "thanks", "thank", "you", "i", "i'd", "i'll", "i'm", "id", "we", "we'd",
-    "let's", "would", "like", "love", "want", "wants", "need", "needs", "could", "can", "will",
-    "may", "might", "must", "should", "shall", "me", "us", "set", "lay", "put", "place", "arrange",
-    "get", "bring", "give", "serve", "prepare", "make", "setup", "up", "out", "down", "the",
-    "table", "setting", "on", "onto", "at", "in", "into", "to", "for", "of", "its", "it", "it's",
-    "their", "his", "her", "my", "our", "your", "this", "that", "these", "those", "there", "here",
-    "is", "are", "be", "just", "only", "too", "as", "well", "now", "nicely", "neatly", "properly",
-    "meal", "dinner", "breakfast", "lunch", "supper", "brunch",
-))
-_SEPARATOR_WORDS = frozenset({"and", "with", "plus", "also", "then"})
-_SEPARATOR_CHARS = frozenset(",;:.!?&+/|()[]{}\n")
-_TOKEN = re.compile(r"[^\W_]+(?:'[^\W_]+)*")
 
 
 @dataclass(frozen=True)
 class Request:
     """A user's request: its ``text``, the catalog ``items`` it asks for, in order, and
     how many ``diners`` it sets the table for (the items are then every diner's, each
-    with its ``diner`` index)."""
+    with its ``diner`` index).
+
+    ``relations`` are those the request states between its objects (first diner's
+    names); ``source`` says how the objects were read: ``"catalog"`` (the matcher alone)
+    or ``"llm"`` (an LLM read what the matcher could not); ``calls`` are those LLM calls;
+    ``warnings`` what the reading could not honour.
+    """
 
     text: str
     items: tuple[Item, ...]
     diners: int = 1
+    relations: tuple[Relation, ...] = ()
+    source: str = "catalog"
+    calls: tuple[CallRecord, ...] = ()
+    warnings: tuple[str, ...] = ()
 
 
-#: Most diners one request may set the table for.
-MAX_DINERS = 12
+@dataclass(frozen=True)
+class Reading:
+    """What the catalog matcher made of a request.
 
-_DINER_NUMBER = r"(\d+|" + "|".join(_NUMBERS) + ")"
-_DINERS = (
-    re.compile(r"\bfor\s+" + _DINER_NUMBER + r"(?:\s+(?:people|persons|diners|guests|of\s+us))?"
-               r"(?![\w'])"),
-    re.compile(r"\b" + _DINER_NUMBER + r"\s+(?:place\s+settings|settings|places|covers)\b"),
-)
+    ``parts`` are the mentions and unread chunks in the order they were written;
+    ``links`` the relations the request states, as ``(subject part, relation, reference
+    part or None)`` indexes into ``parts``; ``rest`` the text without its diner phrase.
+    """
+
+    text: str
+    rest: str
+    diners: int
+    parts: tuple[Mention | Unread, ...]
+    links: tuple[tuple[int, str, int | None], ...] = ()
+
+    @property
+    def unread(self) -> tuple[Unread, ...]:
+        """The chunks the matcher could not account for, in order."""
+        return tuple(p for p in self.parts if isinstance(p, Unread))
+
+    def request(self, answers: Sequence[Sequence[Mention]] = (), source: str = "catalog",
+                calls: Sequence[CallRecord] = (), warnings: Sequence[str] = ()) -> Request:
+        """The request, each unread chunk replaced by the mentions of ``answers`` (one
+        sequence per chunk, in order; an LLM's reading). Raises the first unread chunk's
+        :class:`UnknownObject` when ``answers`` does not cover every chunk, and
+        :class:`BadInput` when nothing is named or the counts are too many."""
+        unread = self.unread
+        if len(answers) < len(unread):
+            raise unread[len(answers)].error()
+        mentions: list[Mention] = []
+        at: dict[int, int] = {}  # part index -> mention index
+        answer = iter(answers)
+        for k, part in enumerate(self.parts):
+            if isinstance(part, Mention):
+                at[k] = len(mentions)
+                mentions.append(part)
+            else:
+                mentions += next(answer)
+        if not mentions:
+            raise BadInput(f"request: no object named in {self.text!r}; "
+                           f"name the objects to set, {_EXAMPLE}")
+        items, names = _items(mentions)
+        notes = list(warnings)
+        relations = _relations(self.links, at, names, notes)
+        return Request(self.text, for_diners(items, self.diners), self.diners, relations,
+                       source, tuple(calls), tuple(notes))
 
 
 def _diner_count(text: str) -> tuple[int, str]:
@@ -116,11 +147,19 @@ def _diner_count(text: str) -> tuple[int, str]:
         m = pattern.search(low)
         if m:
             word = m.group(1)
-            n = int(word) if word.isascii() and word.isdigit() else _NUMBERS.get(word, 0)
+            n = int(word) if is_number(word) else NUMBERS.get(word, 0)
             if not 1 <= n <= MAX_DINERS:
                 raise BadInput(f"request: {m.group(0)!r}: between 1 and {MAX_DINERS} diners")
             return n, text[:m.start()] + " " + text[m.end():]
     return 1, text
+
+
+_DINER_NUMBER = r"([0-9]+|" + "|".join(NUMBERS) + ")"
+_DINERS = (
+    re.compile(r"\bfor\s+" + _DINER_NUMBER + r"(?:\s+(?:people|persons|diners|guests|of\s+us))?"
+               r"(?![\w'])"),
+    re.compile(r"\b" + _DINER_NUMBER + r"\s+(?:place\s+settings|settings|places|covers)\b"),
+)
 
 
 def for_diners(items: Sequence[Item], diners: int) -> tuple[Item, ...]:
@@ -146,150 +185,17 @@ def for_diners(items: Sequence[Item], diners: int) -> tuple[Item, ...]:
     return tuple(out)
 
 
-@dataclass
-class _Mention:
-    """One object named in the request, before instances are numbered."""
-
-    spec: ObjectSpec
-    count: int
-
-
-def _tokens(text: str) -> list[str]:
-    """Words of ``text`` (lower case) with ``","`` standing for every separator."""
-    text = text.lower().replace("\u2019", "'").replace("-", " ")
-    out: list[str] = []
-    pos = 0
-    for m in _TOKEN.finditer(text):
-        if _SEPARATOR_CHARS.intersection(text[pos:m.start()]):
-            out.append(",")
-        word = m.group(0)
-        if word.endswith("'s") and (word,) not in _FILLERS:
-            word = word[:-2]  # a possessive: "the mug's lid" names the mug lid
-        out.append(word)
-        pos = m.end()
-    return out
-
-
-def _longest(words: Sequence[str], i: int, phrases: Iterable[tuple[str, ...]]) -> int:
-    """Length of the longest phrase of ``phrases`` starting at ``words[i]``, else 0."""
-    return max((len(p) for p in phrases if tuple(words[i:i + len(p)]) == p), default=0)
-
-
-class _Reader:
-    """Reads a request's words left to right into mentions; see the module docstring."""
-
-    def __init__(self, text: str, catalog: Catalog) -> None:
-        self.catalog = catalog
-        self.aliases = catalog.aliases()
-        self.longest = max((len(a.split()) for a in self.aliases), default=1)
-        self.words = _tokens(text)
-        self.mentions: list[_Mention] = []
-        self.count: int | None = None   # the pending count of the next object
-        self.count_words: tuple[str, ...] = ()
-        self.unknown: list[str] = []    # words of an unrecognised chunk
-
-    def read(self) -> list[_Mention]:
-        """Every mention; raises on an unknown chunk or a count that counts nothing."""
-        words = self.words
-        i = 0
-        while i < len(words):
-            obj = self._object_at(i)
-            if obj is not None:
-                n, spec, plural = obj
-                self._take(spec, plural, " ".join(words[i:i + n]))
-                i += n
-                continue
-            if words[i] == "or":
-                raise BadInput("request: 'or' leaves the choice open; "
-                               "name exactly the objects to set")
-            if words[i] == "," or words[i] in _SEPARATOR_WORDS:
-                self._end_chunk()
-                i += 1
-                continue
-            n_count = _longest(words, i, _COUNT_PHRASES)
-            n_vague = _longest(words, i, _VAGUE)
-            n_filler = _longest(words, i, _FILLERS)
-            n = max(n_count, n_vague, n_filler)
-            if n == 0 and words[i].isdigit():
-                self._flush_unknown()
-                self._set_count(int(words[i]), (words[i],))
-                n = 1
-            elif n == 0:
-                self.unknown.append(words[i])
-                n = 1
-            elif n == n_count:
-                self._flush_unknown()
-                phrase = tuple(words[i:i + n])
-                self._set_count(_COUNT_PHRASES[phrase], phrase)
-            elif n == n_vague:
-                self._flush_unknown()
-                self._set_count(None, ())
-            else:
-                self._flush_unknown()
-            i += n
-        self._end_chunk()
-        return self.mentions
-
-    def _object_at(self, i: int) -> tuple[int, ObjectSpec, bool] | None:
-        """``(words used, spec, plural?)`` of the longest catalog name at ``words[i]``."""
-        for n in range(min(self.longest, len(self.words) - i), 0, -1):
-            part = self.words[i:i + n]
-            if "," in part:
-                continue
-            phrase = " ".join(part)
-            for form in singular_forms(phrase):
-                if form in self.aliases:
-                    return n, self.catalog.specs[self.aliases[form]], form != phrase
-        return None
-
-    def _check_no_dangling_count(self) -> None:
-        if self.count is not None and self.count_words not in _ARTICLES:
-            raise BadInput(f"request: {' '.join(self.count_words)!r} is not followed by "
-                           "an object name")
-
-    def _set_count(self, value: int | None, words: tuple[str, ...]) -> None:
-        self._check_no_dangling_count()
-        self.count = value
-        self.count_words = words
-
-    def _take(self, spec: ObjectSpec, plural: bool, written: str) -> None:
-        if self.unknown:
-            # Unknown words right before a known name ("blue mug") are part of its name.
-            name = " ".join([*self.unknown, written])
-            hints = [spec.name] + [s for s in self.catalog.suggest(name) if s != spec.name]
-            raise UnknownObject(name, hints[:3])
-        count = self.count
-        if count is None:
-            if plural:
-                raise BadInput(f"request: how many {written!r}? give a number, "
-                               f"e.g. 'three {written}'")
-            count = 1
-        if count < 1:
-            raise BadInput(f"request: '{' '.join(self.count_words)} {written}': "
-                           "a count must be at least 1")
-        if count > MAX_OBJECTS:
-            raise BadInput(f"request: '{count} {written}' is too many; "
-                           f"at most {MAX_OBJECTS} objects in all")
-        self.mentions.append(_Mention(spec, count))
-        self.count, self.count_words = None, ()
-
-    def _flush_unknown(self) -> None:
-        if self.unknown:
-            name = " ".join(self.unknown)
-            raise UnknownObject(name, self.catalog.suggest(name))
-
-    def _end_chunk(self) -> None:
-        self._flush_unknown()
-        self._check_no_dangling_count()
-        self.count, self.count_words = None, ()
-
-
-def _items(mentions: Sequence[_Mention]) -> tuple[Item, ...]:
-    """Numbered items, grouped by kind in order of first mention."""
+def _items(mentions: Sequence[Mention]) -> tuple[tuple[Item, ...], list[list[str]]]:
+    """Numbered items, grouped by kind in order of first mention, and the item names
+    each mention stands for."""
     counts: dict[str, int] = {}
     specs: dict[str, ObjectSpec] = {}
+    names: list[list[str]] = []
     for m in mentions:
-        counts[m.spec.name] = counts.get(m.spec.name, 0) + m.count
+        first = counts.get(m.spec.name, 0)
+        names.append([m.spec.name if k == 1 else f"{m.spec.name} {k}"
+                      for k in range(first + 1, first + m.count + 1)])
+        counts[m.spec.name] = first + m.count
         specs[m.spec.name] = m.spec
     total = sum(counts.values())
     if total > MAX_OBJECTS:
@@ -298,24 +204,72 @@ def _items(mentions: Sequence[_Mention]) -> tuple[Item, ...]:
     for kind, count in counts.items():
         items += [Item(kind if k == 1 else f"{kind} {k}", specs[kind])
                   for k in range(1, count + 1)]
-    return tuple(items)
+    return tuple(items), names
 
 
-def parse_request(text: str, catalog: Catalog) -> Request:
-    """The objects ``text`` asks for, resolved against ``catalog``.
+def _relations(links: Sequence[tuple[int, str, int | None]], at: dict[int, int],
+               names: Sequence[Sequence[str]], warnings: list[str]) -> tuple[Relation, ...]:
+    """The stated relations between items: instance by instance when both sides count
+    the same ("two mugs on two coasters"), every subject to a single reference ("two
+    forks to the left of the plate"); other counts are ambiguous and refused."""
+    out: list[Relation] = []
+    for s, relation, r in links:
+        subjects = names[at[s]]
+        if r is None:
+            if len(subjects) > 1:
+                raise BadInput(f"request: which of the {len(subjects)} {subjects[0]}s goes "
+                               "in the center? say it of one object")
+            out.append(Relation(subjects[0], CENTER, None, source="request"))
+            continue
+        references = names[at[r]]
+        if subjects[0] == references[0]:
+            warnings.append(f"ignored the request's relation of the {subjects[0]} to itself")
+            continue
+        if len(references) == 1:
+            out += [Relation(name, relation, references[0], source="request")
+                    for name in subjects]
+        elif len(references) == len(subjects):
+            out += [Relation(a, relation, b, source="request")
+                    for a, b in zip(subjects, references, strict=True)]
+        else:
+            raise BadInput(f"request: {len(subjects)} {subjects[0]} {relation} "
+                           f"{len(references)} {references[0]}: say which goes with which")
+    return tuple(out)
 
-    Raises :class:`BadInput` for an empty request, a dangling or out-of-range count,
-    a plural without a count or more than :data:`MAX_OBJECTS` objects, and
-    :class:`UnknownObject` (with suggestions) for a name the catalog does not know.
+
+def read_request(text: str, catalog: Catalog) -> Reading:
+    """What the catalog matcher makes of ``text``: its mentions, stated relations and
+    the chunks it cannot account for (see :class:`Reading`).
+
+    Raises :class:`BadInput` for an empty or overlong request, "or", a dangling or
+    out-of-range count, or a plural without a count.
     """
     if not text.strip():
         raise BadInput(f"request: empty; name the objects to set, {_EXAMPLE}")
-    diners, rest = _diner_count(text)
-    mentions = _Reader(rest, catalog).read()
-    if not mentions:
-        raise BadInput(f"request: no object named in {text.strip()!r}; "
-                       f"name the objects to set, {_EXAMPLE}")
-    return Request(text.strip(), for_diners(_items(mentions), diners), diners)
+    if len(text) > MAX_REQUEST_CHARS:
+        raise BadInput(f"request: {len(text)} characters; at most {MAX_REQUEST_CHARS}")
+    bad = _SURROGATE.search(text)
+    if bad:
+        # What a command line holds when its bytes are not UTF-8 (surrogateescape).
+        byte = ord(bad.group(0)) - 0xDC00 if ord(bad.group(0)) >= 0xDC80 else None
+        what = f"the byte 0x{byte:02x}" if byte is not None else "a lone surrogate"
+        raise BadInput(f"request: not UTF-8 text (character {bad.start() + 1} is {what}); "
+                       "write the request in UTF-8")
+    diners, rest = _diner_count(normalized(text))
+    reader = MatchReader(tokens(rest), catalog)
+    reader.read()
+    return Reading(" ".join(text.split()), rest, diners, tuple(reader.parts),
+                   tuple(reader.links))
+
+
+def parse_request(text: str, catalog: Catalog) -> Request:
+    """The objects ``text`` asks for, resolved against ``catalog`` by the matcher alone.
+
+    Raises :class:`BadInput` as :func:`read_request` does, when nothing is named or there
+    are more than :data:`MAX_OBJECTS` objects, and :class:`UnknownObject` (with
+    suggestions) for the first chunk the catalog does not account for.
+    """
+    return read_request(text, catalog).request()
 
 
 def items_from_names(names: Sequence[str], catalog: Catalog, where: str = "objects"
@@ -325,11 +279,11 @@ def items_from_names(names: Sequence[str], catalog: Catalog, where: str = "objec
     Each name must be a single catalog name, synonym or plural; an unknown one raises
     :class:`UnknownObject` naming ``where``.
     """
-    mentions = [_Mention(catalog.resolve(name, where), 1) for name in names]
+    mentions = [Mention(catalog.resolve(name, where), 1) for name in names]
     if not mentions:
         raise BadInput(f"{where}: no objects given")
-    return _items(mentions)
+    return _items(mentions)[0]
 
 
-__all__ = ["MAX_DINERS", "MAX_OBJECTS", "Request", "for_diners", "items_from_names",
-           "parse_request"]
+__all__ = ["MAX_DINERS", "MAX_OBJECTS", "Mention", "Reading", "Request", "Unread",
+           "for_diners", "items_from_names", "parse_request", "read_request"]

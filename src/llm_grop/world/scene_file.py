@@ -69,9 +69,13 @@ class _SceneModel(BaseModel):
     model_config = ConfigDict(extra="allow")
 
 
+#: The largest room side, metres: a dining room, and a bound on the planner's grids.
+MAX_ROOM_SIDE_M = 100.0
+
+
 class RoomEntry(_SceneModel):
-    width: PositiveFloat
-    depth: PositiveFloat
+    width: Annotated[PositiveFloat, Field(le=MAX_ROOM_SIDE_M)]
+    depth: Annotated[PositiveFloat, Field(le=MAX_ROOM_SIDE_M)]
 
 
 class WallEntry(_SceneModel):
@@ -147,7 +151,7 @@ def parse_scene(text: str, where: str) -> Scene:
     if not m.tables:
         raise fail("tables", "no tables; list at least the target table")
     names = [t.name for t in m.tables]
-    listed = ", ".join(names)
+    listed = ", ".join(_plain(n) for n in names)
     for k, name in enumerate(names):
         if name in names[:k]:
             raise fail(f"tables[{k}] ({name!r}).name", f"table {name!r} is listed twice")
@@ -262,7 +266,7 @@ def set_target_top(scene: Scene, top: Table, *, keep_chairs: bool = True) -> Sce
             raise BadInput(f"{where} overlaps wall {j + 1}")
     for c in out.chairs if keep_chairs else ():
         if _overlap(poly, _poly(c.box)):
-            raise BadInput(f"{where} overlaps {c.name}; sample chairs with --chairs N")
+            raise BadInput(f"{where} overlaps {_plain(c.name)}; sample chairs with --chairs N")
     start = out.robot_start
     if _overlap(Point(start.x, start.y).buffer(out.robot.base_radius_m), poly):
         raise BadInput(f"{where} covers the robot's start ({start.x:g}, {start.y:g})")
@@ -327,7 +331,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
 def _unknown_key(m: BaseModel, path: str = "") -> str | None:
     """The path of the first key in ``m`` that the scene layout does not know, or ``None``."""
     for key in m.model_extra or {}:
-        return f"{path}{key}"
+        return f"{path}{_plain(str(key))}"
     for field in type(m).model_fields:
         value = getattr(m, field)
         entries = enumerate(value) if isinstance(value, list) else [(None, value)]
@@ -339,6 +343,12 @@ def _unknown_key(m: BaseModel, path: str = "") -> str | None:
                 if found is not None:
                     return found
     return None
+
+
+def _plain(text: str) -> str:
+    """``text`` as it is when printable, else quoted, so that an error stays on one line
+    (a name from the file may hold a line break)."""
+    return text if text.isprintable() else repr(text)
 
 
 def _box(m: WallEntry) -> Box:
@@ -401,5 +411,5 @@ def _start_blocked(start: Pose2D, radius: float, room: Polygon, walls: tuple[Box
             return f"{at} collides with table {t.name!r}"
     for c in chairs:
         if _overlap(disc, _poly(c.box)):
-            return f"{at} collides with {c.name}"
+            return f"{at} collides with {_plain(c.name)}"
     return None

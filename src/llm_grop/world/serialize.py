@@ -41,7 +41,7 @@ def read_doc(model: type[D], data: Any, where: str) -> D:
 def _relation(rel: Relation, line: bool = False) -> RelationDoc:
     extra = {"line": rel.line} if line else {}
     return RelationDoc(subject=rel.subject, relation=rel.relation, reference=rel.reference,
-                       **extra)
+                       source=rel.source, **extra)
 
 
 def _object(p: Placement) -> ObjectDoc:
@@ -75,7 +75,8 @@ def arrangement_doc(a: Arrangement, *, llm_log: bool = True) -> ArrangementDoc:
         relations=[_relation(r) for r in a.relations],
         **llm,
         warnings=list(a.warnings),
-        conflicts=[[_relation(r, line=True) for r in core] for core in a.conflicts])
+        conflicts=[[_relation(r, line=True) for r in core] for core in a.conflicts],
+        **({"request_read_by": a.read_by} if a.read_by is not None else {}))
 
 
 def arrangement_to_dict(a: Arrangement) -> dict[str, Any]:
@@ -97,12 +98,13 @@ def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -
         placements.append(Placement(o.name, o.x, o.y, o.yaw, o.shape or "box", o.size, o.on,
                                     o.kind or o.name, o.height or 0.0, o.diner))
     try:
-        relations = tuple(Relation(r.subject, r.relation, r.reference) for r in doc.relations)
+        relations = tuple(Relation(r.subject, r.relation, r.reference, source=r.source or "llm")
+                          for r in doc.relations)
     except ValueError as exc:
         raise BadInput(f"{where}: relations: {exc}") from None
     llm = LLMSummary(doc.llm.backend, doc.llm.model) if doc.llm is not None else None
     return Arrangement(doc.request, table_of(doc, where), tuple(placements), relations, llm,
-                       tuple(doc.warnings))
+                       tuple(doc.warnings), read_by=doc.request_read_by)
 
 
 def table_of(doc: ArrangementDoc, where: str = "arrangement") -> Table:

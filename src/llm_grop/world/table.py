@@ -16,6 +16,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from decimal import Decimal
 from typing import Literal, get_args
 
 from llm_grop.errors import BadInput
@@ -27,9 +28,20 @@ TableShape = Literal["rectangle", "circle"]
 #: The shapes a table top may have, as the contract names them.
 TABLE_SHAPES: tuple[str, ...] = get_args(TableShape)
 
-_NUMBER = r"\s*([0-9]*\.?[0-9]+)\s*"
-_RECTANGLE_TEXT = re.compile(_NUMBER + r"[xX×*]" + _NUMBER)
+#: The smallest and the largest side (width, depth or diameter) of a dining table top that
+#: ``--table`` accepts, metres: anything outside is a typo or a unit mix-up (``120x80``).
+MIN_TABLE_SIDE_M = 0.3
+MAX_TABLE_SIDE_M = 10.0
+#: The units a ``--table`` size may be written in, as the power of ten that turns one into
+#: metres (a bare number is metres).
+TABLE_UNIT_EXPONENTS: dict[str, int] = {"m": 0, "cm": -2, "mm": -3}
+#: The units tried, in order, for the "did you mean" hint of an implausible size.
+_HINT_UNITS = ("cm", "mm", "m")
+
+_NUMBER = r"\s*([0-9]*\.?[0-9]+)\s*(mm|cm|m)?\s*"
+_RECTANGLE_TEXT = re.compile(_NUMBER + r"[xX×*]" + _NUMBER, re.IGNORECASE)
 _ROUND_TEXT = re.compile(r"\s*round\s*:" + _NUMBER, re.IGNORECASE)
+_UNITS_HELP = "a unit may follow: 120x80cm, 1.2x0.8m, 1200x800mm, round:120cm"
 #: A seat this far (metres) inside the top still counts as at its edge.
 _SEAT_TOL_M = 1e-3
 #: How far width and depth of a round top may differ (metres): JSON rounds to 0.1 mm.
@@ -51,8 +63,9 @@ class Table:
     diners: tuple[Seat, ...] = ()
 
     def __post_init__(self) -> None:
-        if not (self.width > 0 and self.depth > 0):
-            raise BadInput(f"table: size must be positive, got {self.width} x {self.depth} m")
+        if not (0 < self.width < math.inf and 0 < self.depth < math.inf):
+            raise BadInput(f"table: size must be positive and finite, got {self.width} x "
+                           f"{self.depth} m")
         if self.shape not in TABLE_SHAPES:
             raise BadInput(f"table: shape must be one of {', '.join(TABLE_SHAPES)}, "
                            f"got {self.shape!r}")
@@ -123,19 +136,81 @@ class Table:
 
     @classmethod
     def parse(cls, text: str) -> Table:
-        """A table from ``"WxD"`` in metres (``"0.9x0.6"``) or ``"round:D"``, a round top
-        of diameter ``D`` metres (``"round:1.2"``). Raises :class:`BadInput` otherwise."""
+        """A table from ``"WxD"`` or ``"round:D"`` (a round top of diameter ``D``).
+
+        Sizes are metres (``"0.9x0.6"``, ``"round:1.2"``) unless a unit follows them:
+        ``"120x80cm"``, ``"1.2x0.8m"``, ``"1200x800mm"``, ``"round:120cm"``; a unit after
+        the second side applies to both. Each side must lie between
+        :data:`MIN_TABLE_SIDE_M` and :data:`MAX_TABLE_SIDE_M` metres, so that a size in
+        the wrong unit (``"120x80"``, 120 x 80 m) is refused with a hint rather than used.
+        Raises :class:`BadInput` (one line, naming ``--table``) otherwise.
+        """
         if text.strip().lower().startswith("round"):
             m = _ROUND_TEXT.fullmatch(text)
             if not m:
                 raise BadInput(f"--table: a round table has one size, its diameter in metres: "
-                               f"round:D such as round:1.2, got {text!r}")
-            return _flagged(cls.circle, float(m.group(1)))
-        m = _RECTANGLE_TEXT.fullmatch(text)
-        if not m:
-            raise BadInput(f"--table: expected WxD in metres such as 0.9x0.6, or round:D such "
-                           f"as round:1.2, got {text!r}")
-        return _flagged(cls, float(m.group(1)), float(m.group(2)))
+                               f"round:D such as round:1.2 ({_UNITS_HELP}), got {text!r}")
+            sides = [(m.group(1), m.group(2))]
+            table = _flagged(cls.circle, *_metres(sides))
+        else:
+            m = _RECTANGLE_TEXT.fullmatch(text)
+            if not m:
+                raise BadInput(f"--table: expected WxD in metres such as 0.9x0.6, or round:D "
+                               f"such as round:1.2 ({_UNITS_HELP}), got {text!r}")
+            sides = [(m.group(1), m.group(2)), (m.group(3), m.group(4))]
+            table = _flagged(cls, *_metres(sides))
+        _check_plausible(table, sides)
+        return table
+
+
+_Side = tuple[str, str | None]
+"""One side as written in ``--table``: its number and its unit (``None``: as the other's,
+else metres)."""
+
+
+def _units(sides: list[_Side]) -> list[str]:
+    """Each side's unit: its own, else the last side's (``120x80cm``), else metres."""
+    last = sides[-1][1]
+    if len(sides) > 1 and sides[0][1] is not None and last is None:
+        (w, unit), (d, _) = sides
+        raise BadInput(f"--table: {w}{unit}x{d} gives a unit for the first side only; "
+                       f"write {w}x{d}{unit.lower()}")
+    return [(unit or last or "m").lower() for _, unit in sides]
+
+
+def _metres(sides: list[_Side]) -> list[float]:
+    """The sides in metres."""
+    return [_in_metres(number, unit)
+            for (number, _), unit in zip(sides, _units(sides), strict=True)]
+
+
+def _in_metres(number: str, unit: str) -> float:
+    """``number`` ``unit`` in metres, converted in decimal (``1200 mm`` is exactly ``1.2``)."""
+    return float(Decimal(number).scaleb(TABLE_UNIT_EXPONENTS[unit]))
+
+
+def _plausible(sizes_m: list[float]) -> bool:
+    """Whether every side, metres, is one a dining table has."""
+    return all(MIN_TABLE_SIDE_M <= s <= MAX_TABLE_SIDE_M for s in sizes_m)
+
+
+def _check_plausible(table: Table, sides: list[_Side]) -> None:
+    """:class:`BadInput` with a "did you mean" hint for a top no dining table has."""
+    sizes = [table.width] if table.is_round else [table.width, table.depth]
+    if _plausible(sizes):
+        return
+    numbers = [number for number, _ in sides]
+    written = _units(sides)
+    hint = ""
+    for unit in _HINT_UNITS:
+        if unit not in written and _plausible([_in_metres(n, unit) for n in numbers]):
+            spelled = f"round:{numbers[0]}" if table.is_round else "x".join(numbers)
+            hint = f"; did you mean {spelled}{unit}?"
+            break
+    what, side = (f"round {table.width:g} m", "diameter") if table.is_round else \
+        (f"{table.width:g} x {table.depth:g} m", "each side")
+    raise BadInput(f"--table: {what} is not a dining table ({side} between "
+                   f"{MIN_TABLE_SIDE_M:g} and {MAX_TABLE_SIDE_M:g} m){hint}")
 
 
 def _flagged(make: Callable[..., Table], *size: float) -> Table:
