@@ -14,6 +14,12 @@ command -v make >/dev/null || need_apt+=(make)
 python3 -c "import venv, ensurepip" 2>/dev/null || need_apt+=(python3-venv)
 # MuJoCo renders offscreen through OSMesa (pictures and videos of the 3D simulator).
 ldconfig -p 2>/dev/null | grep -q libOSMesa || need_apt+=(libosmesa6)
+if [ -n "$extras" ]; then
+    # The rating website's browser test drives Debian's Chromium; a browser is never
+    # downloaded. Liberation fonts make its screenshots look as they do for users.
+    [ -x /usr/bin/chromium ] || need_apt+=(chromium chromium-driver)
+    dpkg -s fonts-liberation >/dev/null 2>&1 || need_apt+=(fonts-liberation)
+fi
 if [ ${#need_apt[@]} -gt 0 ]; then
     sudo_cmd=""
     [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"

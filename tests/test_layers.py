@@ -20,19 +20,24 @@ FORBIDDEN: dict[str, set[str]] = {
     "world": {"*"},  # representation only: nothing but errors
     "geometry": {"*"},  # below planning and simulation: nothing but world and errors
     "llm": {"world", "arrangement", "planning", "simulation", "methods", "evaluation",
-            "experiment", "render", "api", "cli"},
+            "experiment", "render", "api", "cli", "ratings"},
     "arrangement": {"evaluation", "experiment", "planning", "simulation", "methods", "api",
-                    "cli", "render"},
-    "planning": {"evaluation", "experiment", "simulation", "methods", "api", "cli", "render"},
-    "simulation": {"evaluation", "experiment", "planning", "methods", "api", "cli", "render"},
-    "methods": {"evaluation", "experiment", "api", "cli", "render"},
+                    "cli", "render", "ratings"},
+    "planning": {"evaluation", "experiment", "simulation", "methods", "api", "cli", "render",
+                 "ratings"},
+    "simulation": {"evaluation", "experiment", "planning", "methods", "api", "cli", "render",
+                   "ratings"},
+    "methods": {"evaluation", "experiment", "api", "cli", "render", "ratings"},
     "evaluation": {"api", "experiment", "arrangement", "planning", "simulation", "methods",
-                   "llm", "render", "cli"},
+                   "llm", "render", "cli", "ratings"},
     "render": {"evaluation", "experiment", "api", "cli", "arrangement", "planning",
-               "simulation", "methods", "llm"},
-    "api": {"experiment", "cli", "evaluation", "render"},
-    "experiment": {"cli"},
-    "env": {"evaluation", "experiment", "api", "cli", "methods"},
+               "simulation", "methods", "llm", "ratings"},
+    "api": {"experiment", "cli", "evaluation", "render", "ratings"},
+    "experiment": {"cli", "ratings"},
+    "env": {"evaluation", "experiment", "api", "cli", "methods", "ratings"},
+    # The human study sits beside the bench: it reads results, never runs a pipeline.
+    "ratings": {"cli", "api", "llm", "arrangement", "planning", "simulation", "methods",
+                "env", "render"},
 }
 #: What a package marked ``*`` may still import.
 ALLOWED_BELOW = {"world": {"errors"}, "geometry": {"errors", "world"}}

@@ -24,6 +24,7 @@ stage                  what it seeds                                          pa
 ``standing``           the baselines' uniform choice of standing positions
 ``ompl``               OMPL's RRTConnect for the plan's k-th navigation leg   k
 ``simulator``          the simulator's outcomes and noise
+``ratings.order``      a human rater's order of a study's pictures            rater
 ====================== ====================================================== ==========
 
 OMPL takes its seed through a process-wide setting; the planner sets it, from the ``ompl``
@@ -52,6 +53,7 @@ STAGES: dict[str, int] = {
     "ompl": 15,
     "simulator": 16,
     "calibration": 17,
+    "ratings.order": 18,
 }
 
 

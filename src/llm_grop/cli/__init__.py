@@ -13,6 +13,7 @@ from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
 from llm_grop.cli.plugins import plugins
 from llm_grop.cli.rate import rate
+from llm_grop.cli.ratings import ratings
 from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
 from llm_grop.errors import LLMGropError
@@ -29,6 +30,7 @@ cli.add_command(arrange)
 cli.add_command(run)
 cli.add_command(bench)
 cli.add_command(rate)
+cli.add_command(ratings)
 cli.add_command(schema)
 cli.add_command(plugins)
 

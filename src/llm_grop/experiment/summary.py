@@ -12,9 +12,9 @@ divided by ``sqrt(n)``.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from rich.console import Console
 from rich.markup import escape
@@ -124,8 +124,31 @@ def summarize(rows: Iterable[TrialRow | Mapping[str, Any]]) -> Summary:
     A row given as a mapping is validated as a :class:`TrialRow`; a malformed one raises
     :class:`BadInput` naming the row, counted from 1, and the field.
     """
-    parsed = [r if isinstance(r, TrialRow) else read_doc(TrialRow, r, f"benchmark row {i}")
-              for i, r in enumerate(rows, 1)]
+    return summarize_outcomes([
+        r if isinstance(r, TrialRow) else read_doc(TrialRow, r, f"benchmark row {i}")
+        for i, r in enumerate(rows, 1)])
+
+
+class Outcome(Protocol):
+    """What a summary needs of one trial: a :class:`TrialRow` has it, and so has a trial
+    rated by people (``rating`` then the mean of their 1-5 ratings)."""
+
+    @property
+    def method(self) -> str: ...
+    @property
+    def task(self) -> int: ...
+    @property
+    def rating(self) -> float: ...
+    @property
+    def execution_time_s(self) -> float | None: ...
+    @property
+    def planning_time_s(self) -> float | None: ...
+    @property
+    def success(self) -> bool: ...
+
+
+def summarize_outcomes(parsed: Sequence[Outcome]) -> Summary:
+    """:func:`summarize` of trials already read."""
     seen: dict[str, None] = {}
     for r in parsed:
         seen.setdefault(r.method, None)
@@ -210,18 +233,27 @@ def _md_row(cells: Iterable[str]) -> str:
     return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
 
 
+Table = tuple[tuple[str, ...], list[tuple[str, ...]]]
+
+
+def summary_tables(summary: Summary) -> tuple[Table, Table]:
+    """The two tables of :func:`summary_markdown` as text cells: ``(headers, rows)`` per
+    method, then per task."""
+    return ((_METHOD_HEADERS, [_method_cells(m) for m in summary.methods]),
+            (("task", *summary.method_names),
+             [_task_cells(summary, task) for task in summary.tasks]))
+
+
 def summary_markdown(summary: Summary) -> str:
     """Two Markdown tables: per method (rating, execution time in s, success rate,
     planning time in ms, each mean ± standard error) and mean rating per task (rows:
     tasks; columns: methods). Ends with a newline."""
-    lines = [_md_row(_METHOD_HEADERS),
-             "| --- | ---: | ---: | ---: | ---: | ---: |"]
-    lines += [_md_row(_method_cells(m)) for m in summary.methods]
-    names = summary.method_names
-    lines += ["", "Mean rating (1-5) per task:", "",
-              _md_row(("task", *names)),
-              "| ---: |" + " ---: |" * len(names)]
-    lines += [_md_row(_task_cells(summary, task)) for task in summary.tasks]
+    (headers, rows), (task_headers, task_rows) = summary_tables(summary)
+    lines = [_md_row(headers), "| --- | ---: | ---: | ---: | ---: | ---: |"]
+    lines += [_md_row(r) for r in rows]
+    lines += ["", "Mean rating (1-5) per task:", "", _md_row(task_headers),
+              "| ---: |" + " ---: |" * (len(task_headers) - 1)]
+    lines += [_md_row(r) for r in task_rows]
     return "\n".join(lines) + "\n"
 
 

@@ -151,7 +151,8 @@ class TrialRunner:
             llm_prompt_tokens=sum(c.prompt_tokens or 0 for c in calls),
             llm_completion_tokens=sum(c.completion_tokens or 0 for c in calls),
             llm_time_s=round(llm_log.wall_s, 4) if llm_log else 0.0,
-            rating=rating.score, rating_explanation=rating.doc(), **extra)
+            rating=rating.score, rating_explanation=rating.doc(),
+            requested=list(task.objects), **extra)
 
     def _render(self, spec: TrialSpec) -> str:
         """Save the simulator's top-down render of the final table."""

@@ -322,6 +322,10 @@ class TrialRow(RunDoc):
                                                   "final table, relative to the results "
                                                   "directory")
     task: Int = Field(description="the task id")
+    requested: list[Name] | None = Field(None, description="the task's objects, as the "
+                                                          "picture lists them at its top; "
+                                                          "absent in rows written before "
+                                                          "0.6")
 
 
 #: The published documents, by the name ``llm-grop schema`` takes.

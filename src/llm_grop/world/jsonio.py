@@ -37,8 +37,13 @@ def write_json(path: str | Path, data: Mapping[str, Any]) -> None:
     the umask). Raises :class:`BadInput` (one line, naming ``path``) if it cannot be
     written.
     """
+    # A value JSON cannot hold fails here, before any file is touched.
+    write_text(path, dumps(data))
+
+
+def write_text(path: str | Path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically, as :func:`write_json` does."""
     path = Path(path)
-    text = dumps(data)  # a value JSON cannot hold fails here, before any file is touched
     try:
         fd, name = tempfile.mkstemp(prefix=f".{path.name[:_TMP_NAME_CHARS]}.", suffix=".tmp",
                                     dir=path.parent)

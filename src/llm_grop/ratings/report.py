@@ -1,0 +1,233 @@
+"""The human ratings' report: the paper's figures of merit from people, not the rater.
+
+A picture's human rating is the mean of its raters' 1-5 ratings; statistics are over
+pictures (trials), so the standard error counts trials, not ratings. The report holds:
+
+* mean ± standard error per method, and per task and method (as the bench's summary);
+* inter-rater agreement: Krippendorff's alpha, ordinal (the ``krippendorff`` package);
+* humans against the automatic rater: Spearman's rho (scipy) between a picture's human
+  mean and its automatic rating, Krippendorff's ordinal alpha between the automatic
+  rating and the rounded human median, and how often a single human rating equals it;
+* paired comparisons of methods on the same trials (Wilcoxon signed-rank,
+  :mod:`llm_grop.experiment.paired`);
+* Fig. 3 and Fig. 5 from the human ratings, by the bench's own plotting code.
+"""
+
+from __future__ import annotations
+
+import math
+import sqlite3
+from collections import defaultdict
+from dataclasses import dataclass
+from pathlib import Path
+from statistics import mean, median
+from typing import Any
+
+import krippendorff
+import numpy as np
+from scipy import stats
+
+from llm_grop.experiment.paired import PairedComparison, paired_comparisons
+from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
+from llm_grop.experiment.summary import (
+    Summary,
+    summarize_outcomes,
+    summary_markdown,
+    summary_tables,
+    summary_to_dict,
+)
+from llm_grop.ratings.pages import STATIC, render
+from llm_grop.world.jsonio import write_json
+
+FIG3 = "fig3_rating_vs_time.png"
+FIG5 = "fig5_rating_per_task.png"
+#: The files :func:`write_report` writes into its directory.
+FILES = ("report.json", "report.md", "report.html", FIG3, FIG5)
+
+
+@dataclass(frozen=True)
+class RatedTrial:
+    """One picture with its ratings: ``rating`` is the mean of ``ratings`` (1-5)."""
+
+    method: str
+    task: int
+    trial: int
+    ratings: tuple[int, ...]
+    automatic_rating: int
+    execution_time_s: float | None
+    success: bool
+    planning_time_s: float | None = None
+
+    @property
+    def rating(self) -> float:
+        """The mean human rating (1-5)."""
+        return mean(self.ratings)
+
+
+@dataclass(frozen=True)
+class Agreement:
+    """How far two sets of ratings agree; NaN where a figure cannot be computed."""
+
+    alpha: float
+    spearman: float
+    exact: float
+    within_one: float
+    n: int
+
+
+@dataclass(frozen=True)
+class HumanReport:
+    """What the people said about the study's pictures."""
+
+    study: str
+    pictures: int
+    raters: int
+    ratings: int
+    summary: Summary
+    inter_rater_alpha: float
+    automatic: Agreement
+    paired: tuple[PairedComparison, ...]
+
+
+def read_trials(conn: sqlite3.Connection) -> tuple[str, int, list[RatedTrial]]:
+    """``(study name, pictures, rated pictures)`` from a study database."""
+    ratings: dict[str, list[int]] = defaultdict(list)
+    for row in conn.execute("SELECT item_id, rating FROM ratings ORDER BY rater_id"):
+        ratings[row[0]].append(row[1])
+    study = conn.execute("SELECT name FROM study").fetchone()
+    items = conn.execute("SELECT id, method, task, trial, automatic_rating, execution_time_s,"
+                         " success FROM items ORDER BY position").fetchall()
+    rated = [RatedTrial(r["method"], r["task"], r["trial"], tuple(ratings[r["id"]]),
+                        r["automatic_rating"], r["execution_time_s"], bool(r["success"]))
+             for r in items if ratings[r["id"]]]
+    return (study["name"] if study else ""), len(items), rated
+
+
+def _alpha(matrix: list[list[float]]) -> float:
+    """Krippendorff's ordinal alpha of coders x units (NaN = not rated); NaN when there is
+    too little to compute it (fewer than two coders on a unit, or one value only)."""
+    data = np.asarray(matrix, dtype=float)
+    pairable = (np.sum(~np.isnan(data), axis=0) >= 2).sum() if data.size else 0
+    values = np.unique(data[~np.isnan(data)]) if data.size else []
+    if data.shape[0] < 2 or pairable == 0 or len(values) < 2:
+        return math.nan
+    return float(krippendorff.alpha(reliability_data=data, level_of_measurement="ordinal",
+                                    value_domain=[1, 2, 3, 4, 5]))
+
+
+def human_report(conn: sqlite3.Connection) -> HumanReport:
+    """The report of the study in ``conn``."""
+    study, pictures, trials = read_trials(conn)
+    raters = [r[0] for r in conn.execute("SELECT DISTINCT rater_id FROM ratings ORDER BY 1")]
+    items = [r[0] for r in conn.execute("SELECT id FROM items ORDER BY position")]
+    column = {item: k for k, item in enumerate(items)}
+    row_of = {rater: k for k, rater in enumerate(raters)}
+    matrix = [[math.nan] * len(items) for _ in raters]
+    for rater, item, value in conn.execute("SELECT rater_id, item_id, rating FROM ratings"):
+        matrix[row_of[rater]][column[item]] = value
+    summary = summarize_outcomes(trials)
+    by_method: dict[str, dict[tuple[int, int], float]] = defaultdict(dict)
+    for t in trials:
+        by_method[t.method][(t.task, t.trial)] = t.rating
+    return HumanReport(
+        study=study, pictures=pictures, raters=len(raters),
+        ratings=sum(len(t.ratings) for t in trials), summary=summary,
+        inter_rater_alpha=_alpha(matrix), automatic=_automatic(trials),
+        paired=paired_comparisons(by_method, summary.method_names))
+
+
+def _automatic(trials: list[RatedTrial]) -> Agreement:
+    if not trials:
+        return Agreement(math.nan, math.nan, math.nan, math.nan, 0)
+    auto = [t.automatic_rating for t in trials]
+    human = [t.rating for t in trials]
+    singles = [(h, t.automatic_rating) for t in trials for h in t.ratings]
+    rho = math.nan
+    if len(set(auto)) > 1 and len(set(human)) > 1:
+        rho = float(stats.spearmanr(human, auto).statistic)
+    medians = [float(round(median(t.ratings) + 1e-9)) for t in trials]
+    return Agreement(alpha=_alpha([auto, medians]), spearman=rho,
+                     exact=sum(h == a for h, a in singles) / len(singles),
+                     within_one=sum(abs(h - a) <= 1 for h, a in singles) / len(singles),
+                     n=len(trials))
+
+
+def _num(x: float) -> float | None:
+    return None if math.isnan(x) else round(x, 4)
+
+
+def report_to_dict(report: HumanReport) -> dict[str, Any]:
+    """``report`` as plain JSON values; NaN becomes ``None``."""
+    a = report.automatic
+    return {"study": report.study, "pictures": report.pictures, "raters": report.raters,
+            "ratings": report.ratings, "summary": summary_to_dict(report.summary),
+            "inter_rater_alpha_ordinal": _num(report.inter_rater_alpha),
+            "automatic_rater": {"alpha_ordinal": _num(a.alpha), "spearman_rho": _num(a.spearman),
+                                "exact_agreement": _num(a.exact),
+                                "within_one": _num(a.within_one), "pictures": a.n},
+            "paired": [p.to_json() for p in report.paired]}
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def _fmt(x: float, digits: int = 3) -> str:
+    return "-" if math.isnan(x) else f"{x:.{digits}f}"
+
+
+def sections(report: HumanReport) -> dict[str, Any]:
+    """The report's figures as text, for the Markdown and the HTML page alike."""
+    a = report.automatic
+    return {
+        "headline": f"{_count(report.ratings, 'rating')} of "
+                    f"{sum(m.trials for m in report.summary.methods)} of the "
+                    f"{_count(report.pictures, 'picture')} by {_count(report.raters, 'rater')}",
+        "agreement": [
+            ("Krippendorff's alpha (ordinal) between raters", _fmt(report.inter_rater_alpha)),
+            ("Krippendorff's alpha (ordinal), automatic rater vs human median",
+             _fmt(a.alpha)),
+            ("Spearman's rho, automatic rater vs human mean", _fmt(a.spearman)),
+            ("single human ratings equal to the automatic rating", _fmt(a.exact, 2)),
+            ("single human ratings within 1 of the automatic rating", _fmt(a.within_one, 2))],
+        "paired_header": ("first", "second", "shared trials", "mean difference (first - second)",
+                          "Wilcoxon W", "p", "rank-biserial r"),
+        "paired": [(p.first, p.second, str(p.n), _fmt(p.mean_difference, 2),
+                    _fmt(p.statistic, 1), _fmt(p.p_value, 4), _fmt(p.effect_size, 2))
+                   for p in report.paired],
+    }
+
+
+def report_markdown(report: HumanReport) -> str:
+    """The report as Markdown, ending with a newline."""
+    s = sections(report)
+    lines = [f"# Human ratings: {report.study}", "", s["headline"] + ".", "",
+             "Mean human rating per picture (1-5), then over pictures:", "",
+             summary_markdown(report.summary).rstrip("\n"), "", "## Agreement", "",
+             "| figure | value |", "| --- | ---: |"]
+    lines += [f"| {k} | {v} |" for k, v in s["agreement"]]
+    lines += ["", "## Paired comparisons (same task and trial)", "",
+              "| " + " | ".join(s["paired_header"]) + " |",
+              "| --- | --- |" + " ---: |" * (len(s["paired_header"]) - 2)]
+    lines += ["| " + " | ".join(row) + " |" for row in s["paired"]]
+    lines += ["", f"![Fig. 3]({FIG3})", "", f"![Fig. 5]({FIG5})"]
+    return "\n".join(lines) + "\n"
+
+
+def write_report(report: HumanReport, out: Path) -> list[Path]:
+    """Write :data:`FILES` into the directory ``out`` (made if missing); their paths."""
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "report.json", report_to_dict(report))
+    plot_rating_vs_time(report.summary, out / FIG3)
+    plot_rating_per_task(report.summary, out / FIG5)
+    _write_text(out / "report.md", report_markdown(report))
+    _write_text(out / "report.html", render(
+        "report.html", report=report, s=sections(report), tables=summary_tables(report.summary),
+        fig3=FIG3, fig5=FIG5, stylesheet=(STATIC / "style.css").read_text("utf-8")))
+    return [out / name for name in FILES]
+
+
+def _write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    tmp.replace(path)
