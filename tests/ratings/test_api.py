@@ -247,6 +247,11 @@ def test_forms_from_another_site_are_refused(client: TestClient, study) -> None:
     assert r.status_code == 303 and r.headers["location"] == "/guidelines"
 
 
+def test_a_huge_body_is_refused_unread(client: TestClient, study) -> None:
+    refused(client.post("/api/session", content=b'{"code": "' + b"A" * 100_000 + b'"}',
+                        headers={"content-type": "application/json"}), 413, "larger than")
+
+
 def test_unknown_routes_and_methods_are_json_errors(client: TestClient) -> None:
     refused(client.get("/api/nothing"), 404, "Not Found")
     refused(client.put("/api/ratings"), 405, "Method Not Allowed")

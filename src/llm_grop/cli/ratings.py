@@ -183,7 +183,7 @@ def report(db: Path, out_dir: Path) -> None:
     out = Console()
     s = sections(result)
     out.print(s["headline"])
-    print_summary(result.summary, out)
+    print_summary(result.summary, out, with_se=True)
     for k, v in s["agreement"]:
         out.print(f"{k}: {v}")
     out.print(f"Wrote {len(written)} files to {out_dir}")

@@ -220,12 +220,12 @@ def _method_cells(m: MethodSummary) -> tuple[str, ...]:
             _rate(m.success_rate), _mean_se(m.planning_time_s, 1, scale=1000.0))
 
 
-def _task_cells(summary: Summary, task: int) -> tuple[str, ...]:
+def _task_cells(summary: Summary, task: int, with_se: bool) -> tuple[str, ...]:
     cells = [str(task)]
     for name in summary.method_names:
         c = summary.cell(name, task)
-        cells.append(_NONE if c is None or math.isnan(c.rating.mean)
-                     else f"{c.rating.mean:.2f}")
+        cells.append(_NONE if c is None else _mean_se(c.rating, 2) if with_se
+                     else _mean_se(Stat(c.rating.mean, math.nan, c.rating.n), 2))
     return tuple(cells)
 
 
@@ -236,28 +236,32 @@ def _md_row(cells: Iterable[str]) -> str:
 Table = tuple[tuple[str, ...], list[tuple[str, ...]]]
 
 
-def summary_tables(summary: Summary) -> tuple[Table, Table]:
+def summary_tables(summary: Summary, *, with_se: bool = False) -> tuple[Table, Table]:
     """The two tables of :func:`summary_markdown` as text cells: ``(headers, rows)`` per
-    method, then per task."""
+    method, then per task (each mean ``± SE`` too when ``with_se``)."""
     return ((_METHOD_HEADERS, [_method_cells(m) for m in summary.methods]),
             (("task", *summary.method_names),
-             [_task_cells(summary, task) for task in summary.tasks]))
+             [_task_cells(summary, task, with_se) for task in summary.tasks]))
 
 
-def summary_markdown(summary: Summary) -> str:
+def _task_title(with_se: bool) -> str:
+    return "Mean rating (1-5) per task" + (", ± SE" if with_se else "")
+
+
+def summary_markdown(summary: Summary, *, with_se: bool = False) -> str:
     """Two Markdown tables: per method (rating, execution time in s, success rate,
     planning time in ms, each mean ± standard error) and mean rating per task (rows:
-    tasks; columns: methods). Ends with a newline."""
-    (headers, rows), (task_headers, task_rows) = summary_tables(summary)
+    tasks; columns: methods; ``± SE`` when ``with_se``). Ends with a newline."""
+    (headers, rows), (task_headers, task_rows) = summary_tables(summary, with_se=with_se)
     lines = [_md_row(headers), "| --- | ---: | ---: | ---: | ---: | ---: |"]
     lines += [_md_row(r) for r in rows]
-    lines += ["", "Mean rating (1-5) per task:", "", _md_row(task_headers),
+    lines += ["", f"{_task_title(with_se)}:", "", _md_row(task_headers),
               "| ---: |" + " ---: |" * (len(task_headers) - 1)]
     lines += [_md_row(r) for r in task_rows]
     return "\n".join(lines) + "\n"
 
 
-def print_summary(summary: Summary, console: Console) -> None:
+def print_summary(summary: Summary, console: Console, *, with_se: bool = False) -> None:
     """Print the tables of :func:`summary_markdown` to ``console`` as rich tables."""
     table = RichTable(title="Results per method (mean ± standard error)", title_justify="left")
     for k, header in enumerate(_METHOD_HEADERS):
@@ -265,10 +269,10 @@ def print_summary(summary: Summary, console: Console) -> None:
     for m in summary.methods:
         table.add_row(*(escape(c) for c in _method_cells(m)))
     console.print(table)
-    per_task = RichTable(title="Mean rating (1-5) per task", title_justify="left")
+    per_task = RichTable(title=_task_title(with_se), title_justify="left")
     per_task.add_column("task", justify="right")
     for name in summary.method_names:
         per_task.add_column(escape(name), justify="right")
     for task in summary.tasks:
-        per_task.add_row(*(escape(c) for c in _task_cells(summary, task)))
+        per_task.add_row(*(escape(c) for c in _task_cells(summary, task, with_se)))
     console.print(per_task)

@@ -38,6 +38,8 @@ from llm_grop.ratings.store import (
 
 COOKIE = "llm_grop_session"
 CSRF_HEADER = "X-CSRF-Token"
+#: The largest request body accepted, bytes: a rating or a join is a few dozen.
+MAX_BODY_BYTES = 16 * 1024
 #: Headers on every answer: no framing, no sniffing, no referrer, nothing from elsewhere.
 SECURITY_HEADERS = {
     "Content-Security-Policy": "default-src 'self'; img-src 'self'; script-src 'self'; "
@@ -48,9 +50,10 @@ SECURITY_HEADERS = {
 }
 
 
-class SecurityHeaders:
-    """ASGI middleware: :data:`SECURITY_HEADERS` on every answer, and ``no-store`` on
-    pages and the API, whose answers are a rater's own."""
+class Hardening:
+    """ASGI middleware: :data:`SECURITY_HEADERS` on every answer, ``no-store`` on pages and
+    the API (whose answers are a rater's own), and 413 for a body declared larger than
+    :data:`MAX_BODY_BYTES`."""
 
     def __init__(self, app: ASGIApp) -> None:
         self.app = app
@@ -70,6 +73,12 @@ class SecurityHeaders:
                     headers["Cache-Control"] = "no-store"
             await send(message)
 
+        length = dict(scope["headers"]).get(b"content-length", b"0")
+        if not length.isdigit() or int(length) > MAX_BODY_BYTES:
+            too_big = JSONResponse({"error": f"request body larger than {MAX_BODY_BYTES} "
+                                             "bytes"}, status_code=413)
+            await too_big(scope, receive, with_headers)
+            return
         await self.app(scope, receive, with_headers)
 
 
@@ -113,7 +122,7 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
                   lifespan=lifespan)
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
     app.state.store = RatingStore(conn, ttl_s=ttl_s)
-    app.add_middleware(SecurityHeaders)
+    app.add_middleware(Hardening)
 
     @app.exception_handler(Refused)
     async def refused(request: Request, exc: Refused) -> Response:

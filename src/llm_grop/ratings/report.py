@@ -37,7 +37,7 @@ from llm_grop.experiment.summary import (
     summary_to_dict,
 )
 from llm_grop.ratings.pages import STATIC, render
-from llm_grop.world.jsonio import write_json
+from llm_grop.world.jsonio import write_json, write_text
 
 FIG3 = "fig3_rating_vs_time.png"
 FIG5 = "fig5_rating_per_task.png"
@@ -203,7 +203,8 @@ def report_markdown(report: HumanReport) -> str:
     s = sections(report)
     lines = [f"# Human ratings: {report.study}", "", s["headline"] + ".", "",
              "Mean human rating per picture (1-5), then over pictures:", "",
-             summary_markdown(report.summary).rstrip("\n"), "", "## Agreement", "",
+             summary_markdown(report.summary, with_se=True).rstrip("\n"), "",
+             "## Agreement", "",
              "| figure | value |", "| --- | ---: |"]
     lines += [f"| {k} | {v} |" for k, v in s["agreement"]]
     lines += ["", "## Paired comparisons (same task and trial)", "",
@@ -220,14 +221,10 @@ def write_report(report: HumanReport, out: Path) -> list[Path]:
     write_json(out / "report.json", report_to_dict(report))
     plot_rating_vs_time(report.summary, out / FIG3)
     plot_rating_per_task(report.summary, out / FIG5)
-    _write_text(out / "report.md", report_markdown(report))
-    _write_text(out / "report.html", render(
-        "report.html", report=report, s=sections(report), tables=summary_tables(report.summary),
-        fig3=FIG3, fig5=FIG5, stylesheet=(STATIC / "style.css").read_text("utf-8")))
+    write_text(out / "report.md", report_markdown(report))
+    write_text(out / "report.html", render(
+        "report.html", report=report, s=sections(report),
+        tables=summary_tables(report.summary, with_se=True), fig3=FIG3, fig5=FIG5,
+        stylesheet=(STATIC / "style.css").read_text("utf-8")))
     return [out / name for name in FILES]
 
-
-def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(path)
