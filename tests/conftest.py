@@ -10,6 +10,9 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
+import shutil
+import tempfile
 import threading
 import time
 from collections import deque
@@ -136,6 +139,15 @@ def _handler(state: ChatServer) -> type[BaseHTTPRequestHandler]:
             pass
 
     return Handler
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """The tests' LLM answer cache is a fresh directory, never the user's."""
+    os.environ["LLM_GROP_CACHE_DIR"] = tempfile.mkdtemp(prefix="llm-grop-test-cache-")
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    shutil.rmtree(os.environ.pop("LLM_GROP_CACHE_DIR", ""), ignore_errors=True)
 
 
 @pytest.fixture

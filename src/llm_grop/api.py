@@ -13,6 +13,7 @@ from llm_grop.arrangement.diners import seat_items, seat_table
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
 from llm_grop.errors import BadInput
 from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
+from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import available_methods, get_method
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR, available_simulators
@@ -33,10 +34,14 @@ __all__ = ["arrange", "available_methods", "available_simulators", "make_llm",
 
 
 def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
-             record: str | PathLike[str] | None = None) -> CallLog:
-    """A logged LLM: a backend by name (or an :class:`LLM` instance), recording to ``record``."""
+             record: str | PathLike[str] | None = None,
+             cache: str | PathLike[str] | None = None) -> CallLog:
+    """A logged LLM: a backend by name (or an :class:`LLM` instance), recording to
+    ``record``, answering seeded calls asked before from the LLM cache in directory
+    ``cache`` (:mod:`llm_grop.llm.cache`; ``None``: no cache)."""
     backend = create_llm(llm, options) if isinstance(llm, str) else llm
-    return CallLog(backend, Path(record) if record is not None else None)
+    return CallLog(backend, Path(record) if record is not None else None,
+                   cache=LLMCache(cache) if cache is not None else None)
 
 
 def resolve_items(request: str | None, task: int | None, catalog: Catalog,

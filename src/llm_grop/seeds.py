@@ -25,6 +25,8 @@ stage                  what it seeds                                          pa
 ``ompl``               OMPL's RRTConnect for the plan's k-th navigation leg   k
 ``simulator``          the simulator's outcomes and noise
 ``ratings.order``      a human rater's order of a study's pictures            rater
+``bootstrap``          the resamples of a paired comparison's confidence      pair
+                       interval (a bench's summary, a human report)
 ====================== ====================================================== ==========
 
 OMPL takes its seed through a process-wide setting; the planner sets it, from the ``ompl``
@@ -54,6 +56,7 @@ STAGES: dict[str, int] = {
     "simulator": 16,
     "calibration": 17,
     "ratings.order": 18,
+    "bootstrap": 19,
 }
 
 

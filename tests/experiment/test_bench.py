@@ -9,7 +9,7 @@ import jsonschema
 import pytest
 
 from llm_grop.cli import main
-from llm_grop.experiment.trial import TIMING_FIELDS
+from llm_grop.experiment.trial import RUN_DEPENDENT_FIELDS
 from llm_grop.world.contract import json_schema
 
 RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"
@@ -23,7 +23,7 @@ def _rows(out: Path) -> list[dict]:
 
 def _stable(rows: list[dict]) -> list[dict]:
     for row in rows:
-        for key in TIMING_FIELDS:
+        for key in RUN_DEPENDENT_FIELDS:
             row.pop(key, None)
     return rows
 
@@ -165,3 +165,29 @@ def test_ctrl_c_loses_no_finished_trial(finished: Path, tmp_path: Path) -> None:
     assert saved
     assert main(BASE + ["--out", str(out)]) == 0
     assert _stable(_rows(out)) == _stable(_rows(finished))
+
+
+def test_the_llm_cache_answers_a_second_bench(tmp_path: Path) -> None:
+    cache = tmp_path / "cache"
+    args = BASE + ["--methods", "latp,llm-grop", "--no-images", "--cache-dir", str(cache)]
+    assert main(args + ["--out", str(tmp_path / "first")]) == 0
+    first = _rows(tmp_path / "first")
+    # The two methods ask the same Template 1 questions with the same seeds.
+    assert sum(r["llm_cache_hits"] for r in first) > 0
+    assert main(args + ["--out", str(tmp_path / "second")]) == 0
+    second = _rows(tmp_path / "second")
+    assert all(r["llm_cache_hits"] == r["llm_calls"] > 0 for r in second)
+    assert _stable(second) == _stable(first)
+    entries = len(list(cache.glob("*/*.json")))
+    assert main(BASE + ["--methods", "llm-grop", "--no-images", "--no-cache", "--cache-dir",
+                        str(cache), "--out", str(tmp_path / "third")]) == 0
+    assert all(r["llm_cache_hits"] == 0 for r in _rows(tmp_path / "third"))
+    assert len(list(cache.glob("*/*.json"))) == entries
+
+
+def test_an_unwritable_cache_directory_is_refused_before_any_trial(tmp_path: Path,
+                                                                   capsys) -> None:
+    (tmp_path / "file").write_text("")
+    assert main(BASE + ["--out", str(tmp_path / "x"), "--cache-dir",
+                        str(tmp_path / "file")]) == 2
+    assert "--cache-dir" in _one_line_error(capsys) and not (tmp_path / "x").exists()

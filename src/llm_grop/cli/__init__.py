@@ -16,6 +16,7 @@ from llm_grop.cli.rate import rate
 from llm_grop.cli.ratings import ratings
 from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
+from llm_grop.cli.sweep import sweep
 from llm_grop.errors import LLMGropError
 
 
@@ -29,6 +30,7 @@ def cli() -> None:
 cli.add_command(arrange)
 cli.add_command(run)
 cli.add_command(bench)
+cli.add_command(sweep)
 cli.add_command(rate)
 cli.add_command(ratings)
 cli.add_command(schema)

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -16,11 +18,18 @@ from llm_grop.cli.options import (
     SIMULATOR,
     TABLE,
     check_out_dir,
+    execution_flags,
+    execution_settings,
     llm_flags_without_record,
     llm_settings,
 )
 from llm_grop.errors import BadInput
 from llm_grop.world.table import Table
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from llm_grop.experiment.runner import Experiment
 
 
 def parse_tasks(text: str, known: dict[int, Any]) -> tuple[int, ...]:
@@ -101,8 +110,6 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
 @click.option("--out", "out_dir", default=Path("bench"), show_default=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="Results directory; rerunning into it resumes.")
-@click.option("--workers", default=1, show_default=True, type=click.IntRange(1),
-              help="Worker processes.")
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
               help="Seed of trial 0 (trial k: seed+k).")
 @click.option("--scene", "scene_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -121,32 +128,55 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
               help="Extra tasks (YAML, like the packaged tasks.yaml); repeatable.")
 @click.option("--no-images", is_flag=True, help="Do not draw each trial's final table.")
 @llm_flags_without_record
+@execution_flags
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
-def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, workers: int,
-          seed: int, scene_path: Path | None, chairs: int | None, table: Table | None,
-          simulator: str, feasibility: str, w: float, fidelity_w: float,
-          task_files: tuple[Path, ...], no_images: bool,
-          catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
+def bench(quiet: bool, **params: Any) -> None:
     """Run the paper's experiment: tasks x trials x methods, rated 1-5 (paper §IV)."""
     from rich.console import Console
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
 
-    from llm_grop.cli.console import print_warnings
-    from llm_grop.experiment.runner import Experiment, run_experiment, write_reports
+    from llm_grop.experiment.executors import describe
+    from llm_grop.experiment.runner import run_experiment, write_reports
     from llm_grop.experiment.summary import print_summary
+
+    out_dir: Path = params["out_dir"]
+    executor, threads, cache = execution_settings(**params)
+    exp = prepare_experiment(threads=threads, cache=cache, **params)
+    console = Console(stderr=True)
+    t0 = time.perf_counter()
+    with TrialProgress(console, quiet, out_dir) as progress:
+        outcome = run_experiment(exp, out_dir, executor=executor, on_start=progress.start,
+                                 on_row=progress.row)
+    wall = time.perf_counter() - t0
+    if outcome.interrupted:
+        console.print(f"interrupted: {len(outcome.rows)} finished trial(s) are saved in "
+                      f"{out_dir / 'trials.jsonl'}; rerun the same command to resume")
+        raise click.exceptions.Exit(130)
+    report = write_reports(out_dir, outcome.rows, exp.seed)
+    if not quiet:
+        out = Console()
+        print_summary(report.summary, out, paired=report.paired)
+        out.print(f"{outcome.ran} trial(s) run, {outcome.skipped} already done, "
+                  f"{wall:.1f} s on {describe(executor)}; results in {out_dir}")
+
+
+def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_dir: Path,
+                       seed: int, scene_path: Path | None, chairs: int | None,
+                       table: Table | None, simulator: str, feasibility: str, w: float,
+                       fidelity_w: float, task_files: tuple[Path, ...], no_images: bool,
+                       catalog_files: tuple[Path, ...], threads: int | None,
+                       cache: str | None, **flags: Any) -> Experiment:
+    """The experiment ``bench``'s flags describe, every input checked (unknown components,
+    tasks, objects and preferences, the output directory) before any trial runs.
+
+    ``threads`` are the embedded model's per worker, ``cache`` the LLM cache's directory
+    (``None``: none); ``flags`` holds the LLM flags (others are ignored).
+    """
+    from llm_grop.experiment.runner import Experiment
     from llm_grop.experiment.trial import TrialSettings
     from llm_grop.llm.registry import BACKENDS, create_llm
     from llm_grop.methods.registry import get_method
     from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.registry import create_simulator
-    from llm_grop.world.contract import TrialRow
     from llm_grop.world.scene_file import load_scene, set_target_top
     from llm_grop.world.tasks import load_tasks
 
@@ -162,7 +192,6 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
     # are written canonically into the experiment's identity.
     sim = create_simulator(simulator)
     feasibility_profile(feasibility)
-    simulator = sim.name
     if not no_images and hasattr(sim, "check_rendering"):
         sim.check_rendering()  # a simulator that renders says now if it cannot
     backend = BACKENDS.key(flags["backend"])
@@ -177,43 +206,59 @@ def bench(tasks_text: str, trials: int, methods_text: str, out_dir: Path, worker
         table_text = table.text  # one spelling per table in the experiment's identity
     _check_tasks(tasks, known, options, catalog_files, sim, scene)
     settings = TrialSettings(
-        backend=backend, llm_options=llm_options, arrange=options,
+        backend=backend, llm_options=replace(llm_options, n_threads=threads),
+        arrange=options, llm_cache=cache,
         scene=str(scene_path) if scene_path else None, chairs=chairs, table=table_text, w=w,
         fidelity_w_s_per_cm=fidelity_w,
         task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
-        images=None if no_images else str(out_dir / "images"), simulator=simulator,
+        images=None if no_images else str(out_dir / "images"), simulator=sim.name,
         feasibility=feasibility)
-    exp = Experiment(tasks, trials, methods, settings, seed)
-    console = Console(stderr=True)
-    progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                        TimeElapsedColumn(), TimeRemainingColumn(), console=console,
-                        disable=quiet)
-    bar = progress.add_task("trials", total=None)
+    return Experiment(tasks, trials, methods, settings, seed)
 
-    def on_start(pending: int, skipped: int) -> None:
-        progress.update(bar, total=pending)
-        if skipped and not quiet:
-            console.print(f"resuming: {skipped} trial(s) already in {out_dir}")
 
-    def on_row(row: TrialRow) -> None:
-        progress.update(bar, advance=1, description=(
-            f"task {row.task} trial {row.trial} {row.method}: rating {row.rating}"))
-        if not quiet and row.planned is not None:
-            print_warnings(row.planned.warnings, console,
-                           f"task {row.task} trial {row.trial} {row.method}")
+class TrialProgress:
+    """A progress bar over trials (on stderr; nothing when ``quiet``) whose :meth:`start`
+    and :meth:`row` are the runner's callbacks, for results in ``where``; ``label`` names a
+    row's experiment (a sweep's cell) in the bar."""
 
-    t0 = time.perf_counter()
-    with progress:
-        outcome = run_experiment(exp, out_dir, workers=workers, on_start=on_start,
-                                 on_row=on_row)
-    wall = time.perf_counter() - t0
-    if outcome.interrupted:
-        console.print(f"interrupted: {len(outcome.rows)} finished trial(s) are saved in "
-                      f"{out_dir / 'trials.jsonl'}; rerun the same command to resume")
-        raise click.exceptions.Exit(130)
-    summary = write_reports(out_dir, outcome.rows)
-    if not quiet:
-        out = Console()
-        print_summary(summary, out)
-        out.print(f"{outcome.ran} trial(s) run, {outcome.skipped} already done, "
-                  f"{wall:.1f} s with {workers} worker(s); results in {out_dir}")
+    def __init__(self, console: Console, quiet: bool, where: Path,
+                 label: Callable[[int], str] | None = None) -> None:
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self.console, self.quiet, self.where, self.label = console, quiet, where, label
+        self.progress = Progress(TextColumn("{task.description}"), BarColumn(),
+                                 MofNCompleteColumn(), TimeElapsedColumn(),
+                                 TimeRemainingColumn(), console=console, disable=quiet)
+        self.bar = self.progress.add_task("trials", total=None)
+
+    def __enter__(self) -> TrialProgress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.progress.stop()
+
+    def start(self, pending: int, skipped: int) -> None:
+        """The runner's ``on_start``: the bar shows from now on (a refusal before it is
+        printed alone)."""
+        self.progress.start()
+        self.progress.update(self.bar, total=pending)
+        if skipped and not self.quiet:
+            self.console.print(f"resuming: {skipped} trial(s) already done in {self.where}")
+
+    def row(self, *args: Any) -> None:
+        """The runner's ``on_row``: ``(row)`` for a bench, ``(cell, row)`` for a sweep."""
+        from llm_grop.cli.console import print_warnings
+
+        *cell, row = args
+        where = f"{self.label(cell[0])}: " if cell and self.label is not None else ""
+        name = f"{where}task {row.task} trial {row.trial} {row.method}"
+        self.progress.update(self.bar, advance=1, description=f"{name}: rating {row.rating}")
+        if not self.quiet and row.planned is not None:
+            print_warnings(row.planned.warnings, self.console, name)

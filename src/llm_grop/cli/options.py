@@ -284,3 +284,61 @@ def check_request(command: str, request: str | None, task: int | None) -> None:
     if request is not None and not request.strip():
         raise BadInput("request: empty; name the objects, e.g. "
                        "'a dinner plate, a dinner fork and a dinner knife'")
+
+
+_EXECUTION_OPTIONS = [
+    click.option("--executor", default="local", show_default=True,
+                 help="Where trials run: local (processes on this machine) or ray (Ray "
+                      "tasks; needs `pip install 'llm-grop[ray]'`)."),
+    click.option("--workers", type=click.IntRange(1),
+                 help="Trials at once: local processes, or Ray tasks in flight [default: 1 "
+                      "locally; under Ray the cluster's CPUs over --cpus-per-trial]."),
+    click.option("--ray-address", metavar="ADDR",
+                 help="The Ray cluster to join, e.g. ray://head:10001 or auto [default: "
+                      "$RAY_ADDRESS, else a cluster started on this machine]."),
+    click.option("--cpus-per-trial", default=1.0, show_default=True,
+                 type=click.FloatRange(0, min_open=True),
+                 help="CPUs a Ray task reserves; below 1 lets trials that wait on a remote "
+                      "LLM share a CPU."),
+    click.option("--llm-threads", type=click.IntRange(1),
+                 help="The embedded model's CPU threads in each worker [default: the cores "
+                      "over --workers locally, 1 under Ray]."),
+    click.option("--cache-dir", type=click.Path(file_okay=False, path_type=Path),
+                 help="The shared LLM answer cache [default: $LLM_GROP_CACHE_DIR, else "
+                      "~/.cache/llm-grop/llm-calls]."),
+    click.option("--no-cache", is_flag=True,
+                 help="Ask the LLM every call, without the shared answer cache."),
+]
+
+
+def execution_flags(f: F) -> F:
+    """Add the flags that say where trials run and how LLM answers are cached."""
+    for option in reversed(_EXECUTION_OPTIONS):
+        f = option(f)
+    return f
+
+
+def execution_settings(executor: str, workers: int | None, ray_address: str | None,
+                       cpus_per_trial: float, llm_threads: int | None, cache_dir: Path | None,
+                       no_cache: bool, **_: Any) -> tuple[Any, int, str | None]:
+    """``(executor, embedded model threads, LLM cache directory or None)`` from the flags
+    of :func:`execution_flags`; the executor is built (Ray is imported) only for ``ray``."""
+    from llm_grop.experiment.executors import (
+        EXECUTORS,
+        ExecutorOptions,
+        create_executor,
+        default_threads,
+    )
+    from llm_grop.llm.cache import default_dir
+
+    name = EXECUTORS.key(executor)
+    if ray_address is not None and name != "ray":
+        raise BadInput("--ray-address: only with --executor ray")
+    made = create_executor(name, ExecutorOptions(workers=workers, address=ray_address,
+                                                 cpus_per_trial=cpus_per_trial))
+    threads = llm_threads or default_threads(name, workers)
+    if no_cache:
+        return made, threads, None
+    root = cache_dir if cache_dir is not None else default_dir()
+    check_out_dir("cache_dir", root)
+    return made, threads, str(root)

@@ -1,4 +1,5 @@
-"""``llm-grop plugins``: every LLM backend, method and simulator, and where it comes from."""
+"""``llm-grop plugins``: every LLM backend, method, simulator and executor, and where it
+comes from."""
 
 from __future__ import annotations
 
@@ -11,14 +12,17 @@ from llm_grop.cli.options import EPILOG
 @click.command(epilog=EPILOG)
 @VERBOSE
 def plugins() -> None:
-    """List the LLM backends, methods and simulators available, shipped or from plugins.
+    """List the LLM backends, methods, simulators and executors available, shipped or from
+    plugins.
 
     A package adds its own through the entry point groups llm_grop.llm_backends,
-    llm_grop.methods and llm_grop.simulators (see the README's "Plugins").
+    llm_grop.methods, llm_grop.simulators and llm_grop.executors (see the README's
+    "Plugins").
     """
     from rich.console import Console
     from rich.table import Table as RichTable
 
+    from llm_grop.experiment.executors import EXECUTORS
     from llm_grop.llm.registry import BACKENDS
     from llm_grop.methods.registry import METHODS
     from llm_grop.simulation.registry import SIMULATORS
@@ -26,7 +30,7 @@ def plugins() -> None:
     table = RichTable(title="Available components", title_justify="left")
     for column in ("kind", "name", "chosen with", "from"):
         table.add_column(column)
-    for registry in (BACKENDS, METHODS, SIMULATORS):
+    for registry in (BACKENDS, METHODS, SIMULATORS, EXECUTORS):
         for name in registry.names():
             table.add_row(registry.kind, name, f"{registry.flag} {name}",
                           registry.origin(name))

@@ -2,8 +2,10 @@
 
 * :func:`plot_rating_vs_time` (Fig. 3): one point per method at its mean execution time
   (seconds, x) and mean rating (1-5, y), with standard-error bars on both axes.
+* :func:`plot_sweep`: a sweep's cells side by side, rating and execution time per method.
 * :func:`plot_rating_per_task` (Fig. 5): grouped bars of the mean rating per task, one
-  bar per method, each labelled with its value to one decimal.
+  bar per method, each labelled with its value to one decimal, with standard-error bars;
+  each task is labelled with its number of trials per method (``n``).
 
 As in :mod:`llm_grop.render.table`, only matplotlib's object API and its Agg canvas are
 used, under a fixed style, at a fixed size and resolution; the same summary always gives
@@ -13,6 +15,7 @@ the same PNG bytes. A method or a (method, task) pair without a value is left ou
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib
@@ -82,7 +85,7 @@ def plot_rating_per_task(summary: Summary, path: str | Path) -> None:
     path = _png_path(path)
     with matplotlib.rc_context(STYLE):
         fig = _new_figure(BARS_FIGSIZE_IN)
-        ax = fig.add_axes((0.06, 0.12, 0.92, 0.74))
+        ax = fig.add_axes((0.06, 0.17, 0.92, 0.69))
         _draw_bars(ax, summary)
         save_png(fig, path)
 
@@ -148,30 +151,96 @@ def _draw_bars(ax: Axes, summary: Summary) -> None:
     for k, name in enumerate(names):
         xs: list[float] = []
         heights: list[float] = []
+        errors: list[float] = []
         for i, task in enumerate(tasks):
             cell = summary.cell(name, task)
             if cell is None or math.isnan(cell.rating.mean):
                 continue
             xs.append(i + (k - (len(names) - 1) / 2) * width)
             heights.append(cell.rating.mean)
+            errors.append(0.0 if math.isnan(cell.rating.se) else cell.rating.se)
         bars = ax.bar(xs, heights, width=width * 0.92, color=styles[name][0],
                       edgecolor="#333333", linewidth=0.5, label=display_name(name), zorder=2)
-        for bar, h in zip(bars, heights, strict=True):
+        if any(errors):
+            ax.errorbar(xs, heights, yerr=errors, fmt="none", ecolor="#222222",
+                        elinewidth=0.8, capsize=2.5, capthick=0.8, zorder=3)
+        for bar, h, err in zip(bars, heights, errors, strict=True):
             cx = bar.get_x() + bar.get_width() / 2
+            # At the bar's foot, clear of its error bar; above a bar too short to hold it.
             inside = h >= (1.2 if vertical else 0.6)
-            ax.annotate(f"{h:.1f}", xy=(cx, h), xytext=(0, -3 if inside else 2),
+            ax.annotate(f"{h:.1f}", xy=(cx, 0.0 if inside else h + err), xytext=(0, 3),
                         textcoords="offset points", ha="center",
-                        va="top" if inside else "bottom", rotation=90 if vertical else 0,
+                        va="bottom", rotation=90 if vertical else 0,
                         fontsize=7, color="white" if inside else "#222222",
                         fontweight="bold", zorder=4, annotation_clip=False)
-    ax.set_xticks(range(len(tasks)), [str(t) for t in tasks])
+    ax.set_xticks(range(len(tasks)), [f"{t}\n{_n_label(summary, t)}" for t in tasks])
     ax.set_xlim(-0.6, max(len(tasks), 1) - 0.4)
     ax.set_ylim(0.0, _RATING_MAX)
     ax.set_xlabel("task")
-    ax.set_ylabel("user rating (1-5), mean")
+    ax.set_ylabel("user rating (1-5), mean ± SE")
     if names:
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.01), ncol=min(len(names), 6),
                   fontsize=8.5, frameon=False)
     if not tasks:
         ax.text(0.5, 0.5, "no rated trial", transform=ax.transAxes, ha="center",
                 va="center", color="#666666")
+
+
+def _n_label(summary: Summary, task: int) -> str:
+    """``n = 20``: the trials behind each bar of ``task`` (``n = 18-20`` when they differ)."""
+    counts = sorted({c.rating.n for name in summary.method_names
+                     if (c := summary.cell(name, task)) is not None and c.rating.n})
+    if not counts:
+        return ""
+    return f"n = {counts[0]}" if len(counts) == 1 else f"n = {counts[0]}–{counts[-1]}"
+
+
+#: Inches of the sweep figure's width per cell, and its height (two panels).
+SWEEP_IN_PER_CELL = 0.9
+SWEEP_HEIGHT_IN = 6.4
+
+
+def plot_sweep(cells: Sequence[tuple[str, Summary]], path: str | Path) -> None:
+    """Write a sweep's figure to ``path``: for each cell (``(label, summary)``, in order),
+    one bar per method of its mean rating (1-5, top panel) and mean execution time
+    (seconds, bottom panel), with standard-error bars; a cell's label goes under its bars.
+    Raises :class:`BadInput` if ``path`` does not end in ``.png`` or cannot be written.
+    """
+    path = _png_path(path)
+    methods = tuple(dict.fromkeys(m for _, s in cells for m in s.method_names))
+    styles = method_styles(methods)
+    width_in = max(BARS_FIGSIZE_IN[0] * 0.6, 1.5 + SWEEP_IN_PER_CELL * len(cells))
+    with matplotlib.rc_context(STYLE):
+        fig = _new_figure((width_in, SWEEP_HEIGHT_IN))
+        left = 0.9 / width_in
+        rating = fig.add_axes((left, 0.6, 1 - left - 0.2 / width_in, 0.33))
+        timing = fig.add_axes((left, 0.22, 1 - left - 0.2 / width_in, 0.33))
+        width = 0.8 / max(len(methods), 1)
+        for ax, value, unit in ((rating, "rating", "rating (1-5), mean ± SE"),
+                                (timing, "execution_time_s", "execution time (s), mean ± SE")):
+            _grid(ax, "y")
+            for k, name in enumerate(methods):
+                xs, heights, errors = [], [], []
+                for i, (_, summary) in enumerate(cells):
+                    m = summary.method(name)
+                    stat_ = getattr(m, value) if m is not None else None
+                    if stat_ is None or math.isnan(stat_.mean):
+                        continue
+                    xs.append(i + (k - (len(methods) - 1) / 2) * width)
+                    heights.append(stat_.mean)
+                    errors.append(0.0 if math.isnan(stat_.se) else stat_.se)
+                ax.bar(xs, heights, width=width * 0.92, color=styles[name][0],
+                       edgecolor="#333333", linewidth=0.5, label=display_name(name), zorder=2)
+                if any(errors):
+                    ax.errorbar(xs, heights, yerr=errors, fmt="none", ecolor="#222222",
+                                elinewidth=0.8, capsize=2, capthick=0.8, zorder=3)
+            ax.set_xlim(-0.6, max(len(cells), 1) - 0.4)
+            ax.set_ylabel(unit)
+        rating.set_ylim(0.0, _RATING_MAX)
+        rating.set_xticks(range(len(cells)), [""] * len(cells))
+        timing.set_xticks(range(len(cells)), [label.replace(",", "\n") for label, _ in cells],
+                          fontsize=7)
+        if methods:
+            rating.legend(loc="lower center", bbox_to_anchor=(0.5, 1.01),
+                          ncol=min(len(methods), 6), fontsize=8.5, frameon=False)
+        save_png(fig, path)

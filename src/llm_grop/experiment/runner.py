@@ -16,8 +16,11 @@ An output directory holds one experiment:
 Trial ``k`` of every task uses seed ``seed + k`` for every method, so methods see the same
 scenes and chairs and the comparison is paired.
 
-Worker processes find installed plugins themselves; methods, backends and simulators
-registered at run time are handed to them (:func:`llm_grop.plugins.registered`).
+Trials run on an executor (:mod:`llm_grop.experiment.executors`: local processes or
+Ray); this process alone writes the results. Worker processes find installed plugins
+themselves; methods, backends and simulators registered at run time are handed to them
+(:func:`llm_grop.plugins.registered`). A sweep runs several experiments, each in its own
+directory, through one executor (:func:`run_cells`).
 """
 
 from __future__ import annotations
@@ -25,10 +28,8 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import multiprocessing
 import os
-import signal
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from importlib import metadata, resources
 from pathlib import Path
@@ -36,9 +37,12 @@ from typing import Any
 
 from llm_grop import plugins
 from llm_grop.errors import BadInput
+from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
+from llm_grop.experiment.paired import PairedComparison, paired_by_trial
 from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
 from llm_grop.experiment.summary import Summary, summarize, summary_markdown, summary_to_dict
-from llm_grop.experiment.trial import TrialRunner, TrialSettings, TrialSpec
+from llm_grop.experiment.trial import TrialSettings, TrialSpec
+from llm_grop.experiment.worker import Job
 from llm_grop.llm.registry import BACKENDS
 from llm_grop.methods.registry import METHODS
 from llm_grop.simulation.registry import SIMULATORS
@@ -177,94 +181,114 @@ def _line(row: TrialRow) -> str:
     return json.dumps(row.to_json(), separators=(",", ":")) + "\n"
 
 
-# Each worker process keeps one runner (one LLM, catalog and scene) for all its trials.
-_RUNNER: TrialRunner | None = None
-# Why a worker could not start; reported with its first trial, because a pool restarts a
-# worker whose initializer raises, forever.
-_START_ERROR: Exception | None = None
+@dataclass(frozen=True)
+class Cell:
+    """One experiment and the directory that keeps its results (a bench runs one; a sweep
+    one per combination of its grid)."""
 
-
-def _init_worker(settings: TrialSettings, registered: dict[str, tuple[str, dict[str, Any]]],
-                 log_level: int) -> None:
-    global _RUNNER, _START_ERROR
-    logging.basicConfig(format="llm-grop: worker %(process)d: %(levelname)s: %(name)s: "
-                        "%(message)s")
-    logging.getLogger("llm_grop").setLevel(log_level)
-    # The parent handles Ctrl-C and stops the workers; they must not die mid-row.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        plugins.restore(registered)
-        _RUNNER = TrialRunner(settings)
-    except Exception as exc:  # noqa: BLE001 - handed to the parent with the first trial
-        _START_ERROR = exc
-
-
-def _work(spec: TrialSpec) -> TrialRow:
-    if _START_ERROR is not None:
-        raise _START_ERROR
-    assert _RUNNER is not None
-    return _RUNNER(spec)
-
-
-def _results(pending: list[TrialSpec], settings: TrialSettings, workers: int,
-             registered: dict[str, tuple[str, dict[str, Any]]]) -> Iterator[TrialRow]:
-    if workers <= 1:
-        runner = TrialRunner(settings)
-        for spec in pending:
-            yield runner(spec)
-        return
-    ctx = multiprocessing.get_context("spawn")
-    pool = ctx.Pool(workers, initializer=_init_worker,
-                    initargs=(settings, registered, log.getEffectiveLevel()))
-    try:
-        yield from pool.imap_unordered(_work, pending, chunksize=1)
-        pool.close()
-    finally:
-        pool.terminate()
-        pool.join()
+    experiment: Experiment
+    out: Path
 
 
 def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
+                   executor: Executor | None = None,
                    on_start: Callable[[int, int], None] | None = None,
                    on_row: Callable[[TrialRow], None] | None = None) -> Outcome:
     """Run the trials of ``exp`` not yet in ``out``; returns every row there.
 
+    Trials run on ``executor`` (default: ``workers`` local processes).
     ``on_start(pending, skipped)`` is called once, ``on_row`` after each finished trial.
     """
-    # Checked before the directory is made: an entry that cannot reach workers fails now.
-    used = {BACKENDS.group: [exp.settings.backend], SIMULATORS.group: [exp.settings.simulator],
-            METHODS.group: list(exp.methods)}
-    registered = plugins.registered(used) if workers > 1 else {}
-    prepare_dir(out, exp)
-    if exp.settings.images is not None:
-        Path(exp.settings.images).mkdir(parents=True, exist_ok=True)
-    rows = read_rows(out)
-    done = {_key(r) for r in rows}
-    wanted = exp.specs()
-    pending = [s for s in wanted if s.key not in done]
+    executor = executor or LocalExecutor(ExecutorOptions(workers=workers))
+    (outcome,) = run_cells([Cell(exp, out)], executor, on_start=on_start,
+                           on_row=None if on_row is None else lambda _, row: on_row(row))
+    return outcome
+
+
+def run_cells(cells: Sequence[Cell], executor: Executor, *,
+              on_start: Callable[[int, int], None] | None = None,
+              on_row: Callable[[int, TrialRow], None] | None = None,
+              keep_rows: bool = True) -> tuple[Outcome, ...]:
+    """Run every cell's trials not yet in its directory, all through one ``executor``, and
+    return each cell's :class:`Outcome` (in ``cells``' order).
+
+    Every directory is checked before any trial runs. This process alone writes results:
+    a finished trial's pictures, then its row, appended and synced to its cell's
+    ``trials.jsonl``; rows are not kept in memory while trials run, so a sweep of any size
+    fits. ``on_start(pending, skipped)`` is called once with the totals over the cells;
+    ``on_row(cell index, row)`` after each finished trial. Ctrl-C stops the executor and
+    keeps every finished trial. Without ``keep_rows`` the outcomes hold no rows (read
+    each cell's with :func:`read_rows`).
+    """
+    used: dict[str, list[str]] = {BACKENDS.group: [], SIMULATORS.group: [], METHODS.group: []}
+    for cell in cells:
+        s = cell.experiment.settings
+        used[BACKENDS.group].append(s.backend)
+        used[SIMULATORS.group].append(s.simulator)
+        used[METHODS.group] += cell.experiment.methods
+    # Checked before any directory is made: an entry that cannot reach workers fails now.
+    registered = plugins.registered(used) if executor.spawns else {}
+    for cell in cells:
+        prepare_dir(cell.out, cell.experiment)
+    jobs: list[Job] = []
+    skipped: list[int] = []
+    for index, cell in enumerate(cells):
+        if cell.experiment.settings.images is not None:
+            Path(cell.experiment.settings.images).mkdir(parents=True, exist_ok=True)
+        mine = read_rows(cell.out)
+        done = {_key(r) for r in mine}
+        wanted = cell.experiment.specs()
+        pending = [Job(index, cell.experiment.settings, s) for s in wanted if s.key not in done]
+        jobs += pending
+        skipped.append(len(wanted) - len(pending))
+        _rewrite(cell.out, mine)  # drops a cut-off last line before appending
+        del mine
     if on_start is not None:
-        on_start(len(pending), len(wanted) - len(pending))
-    ran, interrupted = 0, False
-    _rewrite(out, rows)  # drops a cut-off last line before appending
+        on_start(len(jobs), sum(skipped))
+    ran = [0] * len(cells)
+    interrupted = False
+    results = executor.run(jobs, registered)
     try:
-        with (out / ROWS).open("a", encoding="utf-8") as f:
-            for row in _results(pending, exp.settings, workers, registered):
-                f.write(_line(row))
-                f.flush()
-                os.fsync(f.fileno())
-                rows.append(row)
-                log.info("task %s trial %d %s: rating %d, %s", row.task, row.trial, row.method,
-                         row.rating, "success" if row.success else row.status)
-                ran += 1
-                if on_row is not None:
-                    on_row(row)
+        for finished in results:
+            cell = cells[finished.cell]
+            for rel, data in finished.pictures:
+                _write_atomically(cell.out / rel, data)
+            _append(cell.out / ROWS, finished.row)
+            ran[finished.cell] += 1
+            row = finished.row
+            log.info("task %s trial %d %s: rating %d, %s", row.task, row.trial, row.method,
+                     row.rating, "success" if row.success else row.status)
+            if on_row is not None:
+                on_row(finished.cell, row)
     except KeyboardInterrupt:
         interrupted = True
-    if not interrupted:
-        rows.sort(key=_sort_key)
-        _rewrite(out, rows)
-    return Outcome(tuple(sorted(rows, key=_sort_key)), ran, len(wanted) - len(pending),
-                   interrupted)
+    finally:
+        close = getattr(results, "close", None)
+        if close is not None:
+            close()  # stops the work still under way
+    outcomes = []
+    for index, cell in enumerate(cells):
+        mine = sorted(read_rows(cell.out), key=_sort_key)
+        if not interrupted:
+            _rewrite(cell.out, mine)
+        outcomes.append(Outcome(tuple(mine) if keep_rows else (), ran[index], skipped[index],
+                                interrupted))
+    return tuple(outcomes)
+
+
+def _append(path: Path, row: TrialRow) -> None:
+    """Append ``row`` to the results file ``path`` as one line, synced to disk."""
+    with path.open("a", encoding="utf-8") as f:
+        f.write(_line(row))
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def _write_atomically(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a file beside it, renamed into place."""
+    tmp = path.with_name(f".{path.name}.part")
+    tmp.write_bytes(data)
+    tmp.replace(path)
 
 
 def _rewrite(out: Path, rows: list[TrialRow]) -> None:
@@ -278,11 +302,23 @@ def _rewrite(out: Path, rows: list[TrialRow]) -> None:
     tmp.replace(out / ROWS)
 
 
-def write_reports(out: Path, rows: Sequence[TrialRow]) -> Summary:
-    """Write the summary and the paper's two plots from ``rows``; returns the summary."""
+def write_reports(out: Path, rows: Sequence[TrialRow], seed: int = 0) -> Report:
+    """Write the summary, with the methods' paired comparisons (their bootstrap drawn from
+    ``seed``, the bench's), and the paper's two plots from ``rows``."""
     summary = summarize(rows)
-    write_json(out / "summary.json", summary_to_dict(summary))
-    (out / "summary.md").write_text(summary_markdown(summary), encoding="utf-8")
+    paired = paired_by_trial(rows, summary.method_names, seed)
+    write_json(out / "summary.json", summary_to_dict(summary, paired))
+    (out / "summary.md").write_text(summary_markdown(summary, paired=paired),
+                                    encoding="utf-8")
     plot_rating_vs_time(summary, out / "fig3_rating_vs_time.png")
     plot_rating_per_task(summary, out / "fig5_rating_per_task.png")
-    return summary
+    return Report(summary, paired)
+
+
+@dataclass(frozen=True)
+class Report:
+    """What :func:`write_reports` wrote: the summary and the paired comparisons (value ->
+    comparisons)."""
+
+    summary: Summary
+    paired: Mapping[str, tuple[PairedComparison, ...]]

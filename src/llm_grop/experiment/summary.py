@@ -20,6 +20,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table as RichTable
 
+from llm_grop.experiment.paired import PairedComparison
 from llm_grop.world.contract import TrialRow
 from llm_grop.world.serialize import read_doc
 
@@ -176,11 +177,18 @@ def _stat_dict(s: Stat) -> dict[str, float | int | None]:
             "se": None if math.isnan(s.se) else s.se, "n": s.n}
 
 
-def summary_to_dict(summary: Summary) -> dict[str, Any]:
+Paired = Mapping[str, Sequence[PairedComparison]]
+
+
+def summary_to_dict(summary: Summary, paired: Paired | None = None) -> dict[str, Any]:
     """``summary`` as plain JSON values; NaN (no value, or no SE) becomes ``None``.
 
     Times stay in seconds (keys ending in ``_s``); ``success_rate`` is a fraction (0-1).
+    ``paired`` (value name -> comparisons, :func:`~llm_grop.experiment.paired.paired_by_trial`)
+    is added under ``"paired"`` when given.
     """
+    extra = {} if paired is None else {"paired": {
+        value: [c.to_json() for c in comparisons] for value, comparisons in paired.items()}}
     return {
         "methods": [{"method": m.method, "trials": m.trials,
                      "rating": _stat_dict(m.rating),
@@ -191,10 +199,10 @@ def summary_to_dict(summary: Summary) -> dict[str, Any]:
         "per_task": [{"method": t.method, "task": t.task, "rating": _stat_dict(t.rating),
                       "execution_time_s": _stat_dict(t.execution_time_s)}
                      for t in summary.per_task],
-    }
+    } | extra
 
 
-def _mean_se(s: Stat, digits: int, scale: float = 1.0) -> str:
+def mean_se(s: Stat, digits: int, scale: float = 1.0) -> str:
     """``"mean ± se"`` (``scale`` times each) to ``digits`` decimals; just the mean when
     there is no SE; ``"-"`` when there is no value."""
     if math.isnan(s.mean):
@@ -203,7 +211,7 @@ def _mean_se(s: Stat, digits: int, scale: float = 1.0) -> str:
     return text if math.isnan(s.se) else f"{text} ± {s.se * scale:.{digits}f}"
 
 
-def _rate(s: Stat) -> str:
+def rate_text(s: Stat) -> str:
     """A success rate as ``"90% (18/20)"``."""
     if s.n == 0:
         return _NONE
@@ -216,20 +224,20 @@ _METHOD_HEADERS = ("method", "trials", "rating (1-5), mean ± SE",
 
 
 def _method_cells(m: MethodSummary) -> tuple[str, ...]:
-    return (m.method, str(m.trials), _mean_se(m.rating, 2), _mean_se(m.execution_time_s, 1),
-            _rate(m.success_rate), _mean_se(m.planning_time_s, 1, scale=1000.0))
+    return (m.method, str(m.trials), mean_se(m.rating, 2), mean_se(m.execution_time_s, 1),
+            rate_text(m.success_rate), mean_se(m.planning_time_s, 1, scale=1000.0))
 
 
 def _task_cells(summary: Summary, task: int, with_se: bool) -> tuple[str, ...]:
     cells = [str(task)]
     for name in summary.method_names:
         c = summary.cell(name, task)
-        cells.append(_NONE if c is None else _mean_se(c.rating, 2) if with_se
-                     else _mean_se(Stat(c.rating.mean, math.nan, c.rating.n), 2))
+        cells.append(_NONE if c is None else mean_se(c.rating, 2) if with_se
+                     else mean_se(Stat(c.rating.mean, math.nan, c.rating.n), 2))
     return tuple(cells)
 
 
-def _md_row(cells: Iterable[str]) -> str:
+def md_row(cells: Iterable[str]) -> str:
     return "| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |"
 
 
@@ -248,20 +256,60 @@ def _task_title(with_se: bool) -> str:
     return "Mean rating (1-5) per task" + (", ± SE" if with_se else "")
 
 
-def summary_markdown(summary: Summary, *, with_se: bool = False) -> str:
+def summary_markdown(summary: Summary, *, with_se: bool = False,
+                     paired: Paired | None = None) -> str:
     """Two Markdown tables: per method (rating, execution time in s, success rate,
     planning time in ms, each mean ± standard error) and mean rating per task (rows:
-    tasks; columns: methods; ``± SE`` when ``with_se``). Ends with a newline."""
+    tasks; columns: methods; ``± SE`` when ``with_se``); then, when ``paired`` is given,
+    the paired comparisons of :func:`paired_table`. Ends with a newline."""
     (headers, rows), (task_headers, task_rows) = summary_tables(summary, with_se=with_se)
-    lines = [_md_row(headers), "| --- | ---: | ---: | ---: | ---: | ---: |"]
-    lines += [_md_row(r) for r in rows]
-    lines += ["", f"{_task_title(with_se)}:", "", _md_row(task_headers),
+    lines = [md_row(headers), "| --- | ---: | ---: | ---: | ---: | ---: |"]
+    lines += [md_row(r) for r in rows]
+    lines += ["", f"{_task_title(with_se)}:", "", md_row(task_headers),
               "| ---: |" + " ---: |" * (len(task_headers) - 1)]
-    lines += [_md_row(r) for r in task_rows]
+    lines += [md_row(r) for r in task_rows]
+    if paired:
+        headers, rows = paired_table(paired)
+        lines += ["", f"{PAIRED_TITLE}:", "", md_row(headers),
+                  "| --- | --- | --- |" + " ---: |" * (len(headers) - 3)]
+        lines += [md_row(r) for r in rows]
     return "\n".join(lines) + "\n"
 
 
-def print_summary(summary: Summary, console: Console, *, with_se: bool = False) -> None:
+PAIRED_TITLE = ("Paired comparisons on the same task and trial: the mean difference first - "
+                "second with its 95 % bootstrap CI, Wilcoxon signed-rank W and p, "
+                "rank-biserial r")
+_PAIRED_HEADERS = ("value", "first", "second", "n", "mean diff.", "95 % CI", "W", "p", "r")
+_VALUE_NAMES = {"rating": "rating", "execution_time_s": "time (s)"}
+
+
+def paired_table(paired: Paired) -> Table:
+    """The paired comparisons as text cells: ``(headers, rows)``, one row per value and
+    pair of methods."""
+    def num(x: float, digits: int) -> str:
+        return _NONE if math.isnan(x) else f"{x:.{digits}f}"
+
+    rows = []
+    for value, comparisons in paired.items():
+        digits = 2 if value == "rating" else 1
+        for c in comparisons:
+            ci = _NONE if math.isnan(c.ci_low) else \
+                f"[{c.ci_low:.{digits}f}, {c.ci_high:.{digits}f}]"
+            rows.append((_VALUE_NAMES.get(value, value), c.first, c.second, str(c.n),
+                         num(c.mean_difference, digits), ci, num(c.statistic, 1),
+                         _p(c.p_value), num(c.effect_size, 2)))
+    return _PAIRED_HEADERS, rows
+
+
+def _p(p: float) -> str:
+    """A p-value: 4 decimals, or ``< 0.0001``."""
+    if math.isnan(p):
+        return _NONE
+    return "< 0.0001" if p < 1e-4 else f"{p:.4f}"
+
+
+def print_summary(summary: Summary, console: Console, *, with_se: bool = False,
+                  paired: Paired | None = None) -> None:
     """Print the tables of :func:`summary_markdown` to ``console`` as rich tables."""
     table = RichTable(title="Results per method (mean ± standard error)", title_justify="left")
     for k, header in enumerate(_METHOD_HEADERS):
@@ -276,3 +324,11 @@ def print_summary(summary: Summary, console: Console, *, with_se: bool = False) 
     for task in summary.tasks:
         per_task.add_row(*(escape(c) for c in _task_cells(summary, task, with_se)))
     console.print(per_task)
+    if paired:
+        headers, rows = paired_table(paired)
+        pairs = RichTable(title=PAIRED_TITLE, title_justify="left")
+        for k, header in enumerate(headers):
+            pairs.add_column(header, justify="left" if k < 3 else "right")
+        for row in rows:
+            pairs.add_row(*(escape(c) for c in row))
+        console.print(pairs)

@@ -21,6 +21,7 @@ from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.errors import Infeasible
 from llm_grop.evaluation.rater import rate
 from llm_grop.llm.base import LLM, BackendOptions, CallLog
+from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import get_method
 from llm_grop.planning.utility import GropOptions
@@ -40,8 +41,11 @@ from llm_grop.world.tasks import Task, load_tasks
 
 log = logging.getLogger(__name__)
 
-#: Trial-row fields that hold wall-clock measurements; everything else repeats exactly.
+#: Trial-row fields that hold wall-clock measurements.
 TIMING_FIELDS = ("planning_time_s", "llm_time_s")
+#: Trial-row fields that depend on how the experiment ran (wall clocks, and which trial
+#: asked the shared LLM cache first); everything else repeats exactly for a seed.
+RUN_DEPENDENT_FIELDS = (*TIMING_FIELDS, "llm_cache_hits")
 
 
 @dataclass(frozen=True)
@@ -68,7 +72,8 @@ class TrialSettings:
     ``"round:1.2"``; ``None``: the scene's); ``w``: GROP's utility weight, seconds;
     ``simulator``: the simulator that executes every plan; ``feasibility``: the planner's
     feasibility profile; ``images``: where to draw each trial's final table (``None``: no
-    pictures).
+    pictures); ``llm_cache``: the LLM cache's directory (``None``: no cache), which changes
+    no answer and so is no part of the experiment's identity.
     """
 
     backend: str = "replay"
@@ -84,6 +89,7 @@ class TrialSettings:
     feasibility: str = "default"
     table: str | None = None
     fidelity_w_s_per_cm: float = 1.0
+    llm_cache: str | None = None
 
 
 class TrialRunner:
@@ -105,10 +111,13 @@ class TrialRunner:
         use (methods without an LLM never load a model)."""
         if self._backend is None:
             self._backend = create_llm(self.settings.backend, self.settings.llm_options)
-        return CallLog(self._backend)
+        cache = self.settings.llm_cache
+        return CallLog(self._backend, cache=LLMCache(cache) if cache is not None else None)
 
-    def __call__(self, spec: TrialSpec) -> TrialRow:
-        """The trial's row."""
+    def __call__(self, spec: TrialSpec, images: Path | None = None) -> TrialRow:
+        """The trial's row; its pictures go to ``images`` when given, else to the
+        settings' directory (the row names them relative to the results directory either
+        way)."""
         task = self.tasks[spec.task]
         llm_log = self.llm() if get_method(spec.method).uses_llm else None
         # A scene that seats several diners sets the task's objects once for each of them.
@@ -142,30 +151,29 @@ class TrialRunner:
         calls = llm_log.calls if llm_log else []
         rating = rate(episode["final"], requested=requested, catalog=self.catalog)
         extra: dict[str, Any] = {}
-        if self.settings.images is not None:
-            extra["image"] = self._draw(spec, task, final)
+        if images is None and self.settings.images is not None:
+            images = Path(self.settings.images)
+        if images is not None:
+            extra["image"] = self._draw(spec, task, final, images)
             if episode["status"] == "ok" and hasattr(self.simulator, "picture"):
-                extra["render"] = self._render(spec)
+                extra["render"] = self._render(spec, images)
         return TrialRow(
             **episode, trial=spec.trial, llm_calls=len(calls),
             llm_prompt_tokens=sum(c.prompt_tokens or 0 for c in calls),
             llm_completion_tokens=sum(c.completion_tokens or 0 for c in calls),
             llm_time_s=round(llm_log.wall_s, 4) if llm_log else 0.0,
+            llm_cache_hits=llm_log.cache_hits if llm_log else 0,
             rating=rating.score, rating_explanation=rating.doc(),
             requested=list(task.objects), **extra)
 
-    def _render(self, spec: TrialSpec) -> str:
+    def _render(self, spec: TrialSpec, images: Path) -> str:
         """Save the simulator's top-down render of the final table."""
         name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}_render.png"
-        assert self.settings.images is not None
         save_rgb_png(self.simulator.picture("table"),  # type: ignore[attr-defined]
-                     Path(self.settings.images) / name)
+                     images / name)
         return f"images/{name}"
 
-    def _draw(self, spec: TrialSpec, task: Task, final: Arrangement) -> str:
+    def _draw(self, spec: TrialSpec, task: Task, final: Arrangement, images: Path) -> str:
         name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}.png"
-        assert self.settings.images is not None
-        path = Path(self.settings.images) / name
-        draw_arrangement(final, path, title="Requested: " + ", ".join(task.objects))
+        draw_arrangement(final, images / name, title="Requested: " + ", ".join(task.objects))
         return f"images/{name}"
-

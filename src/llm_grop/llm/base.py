@@ -5,10 +5,11 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
+from llm_grop.llm.cache import CallKey, LLMCache, backend_identity
 from llm_grop.llm.record import LLMCallRecord, append_record
 
 log = logging.getLogger(__name__)
@@ -80,12 +81,15 @@ class CallLog:
     """Wraps an :class:`LLM`, keeping every call and appending it to a record file.
 
     The record file is JSONL (one call a line, flushed at once, so an interrupted
-    run loses no call); the replay backend reads it back.
+    run loses no call); the replay backend reads it back. With a ``cache``, a seeded call
+    asked before (by any process on the machine) is answered from it, its record marked
+    ``cached``.
     """
 
     llm: LLM
     record_path: Path | None = None
     calls: list[LLMCallRecord] = field(default_factory=list)
+    cache: LLMCache | None = None
     #: Wall-clock seconds spent in :meth:`complete` so far (recording included). Unlike
     #: the records' ``latency_s``, which a replay copies from the recording, this is the
     #: time this process really waited.
@@ -104,12 +108,18 @@ class CallLog:
         """The backend's answer to ``prompt``, kept and recorded; ``schema`` (a JSON Schema
         for the answer) reaches only backends that accept one."""
         t0 = time.perf_counter()
+        if not getattr(self.llm, "accepts_schema", False):
+            schema = None
+        # An unseeded call is asked to differ from the last, so it is never cached.
+        cache = self.cache if params.seed is not None else None
+        key = CallKey(self.llm.backend, backend_identity(self.llm), prompt, asdict(params),
+                      grammar, schema)
         try:
-            if schema is not None and getattr(self.llm, "accepts_schema", False):
-                record = self.llm.complete(prompt, params, grammar,
-                                           schema=schema)  # type: ignore[call-arg]
-            else:
-                record = self.llm.complete(prompt, params, grammar)
+            record = cache.get(key) if cache is not None else None
+            if record is None:
+                record = self._ask(prompt, params, grammar, schema)
+                if cache is not None:
+                    cache.put(key, record)
             self.calls.append(record)
             log.debug("%s call, seed %s: %.2f s, %s completion tokens", record.backend,
                       record.seed, record.latency_s, record.completion_tokens)
@@ -118,3 +128,15 @@ class CallLog:
         finally:
             self.wall_s += time.perf_counter() - t0
         return record
+
+    @property
+    def cache_hits(self) -> int:
+        """How many of :attr:`calls` the cache answered."""
+        return sum(c.cached for c in self.calls)
+
+    def _ask(self, prompt: str, params: SamplingParams, grammar: str | None,
+             schema: Mapping[str, Any] | None) -> LLMCallRecord:
+        if schema is not None:
+            return self.llm.complete(prompt, params, grammar,
+                                     schema=schema)  # type: ignore[call-arg]
+        return self.llm.complete(prompt, params, grammar)

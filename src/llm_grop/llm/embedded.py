@@ -28,7 +28,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Iterator
-from importlib import resources
+from importlib import metadata, resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -83,6 +83,18 @@ class EmbeddedLLM:
         # llama.cpp contexts are not thread-safe.
         self._lock = threading.Lock()
         self.load_s: float | None = None
+
+    @property
+    def cache_identity(self) -> str:
+        """What the LLM cache keys this backend's answers by: the model file (the bundled
+        package's version, or a GGUF file's path, size and time) and llama.cpp's version,
+        whose updates may change answers."""
+        llama = _version("llama-cpp-python")
+        if self._custom_path is None:
+            return f"embedded:{DEFAULT_MODEL}:{_version(_BUNDLED_PACKAGE)}:{llama}"
+        path = self._custom_path.resolve()
+        stat = path.stat()
+        return f"embedded:{path}:{stat.st_size}:{stat.st_mtime_ns}:{llama}"
 
     def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
                  ) -> LLMCallRecord:
@@ -219,3 +231,11 @@ def _grammar_complaint(grammar: str, log: str) -> str:
     if not _ROOT_RULE.search(grammar):
         return "it has no 'root' rule"
     return "llama.cpp rejected it"
+
+
+def _version(distribution: str) -> str:
+    """An installed distribution's version, or ``"?"``."""
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:
+        return "?"

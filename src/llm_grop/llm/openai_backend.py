@@ -73,6 +73,8 @@ class OpenAILLM:
                                  ) from None
         #: The endpoint in use, without a trailing slash.
         self.base_url: str = str(self._client.base_url).rstrip("/")
+        #: What the LLM cache keys this backend's answers by: the endpoint and the model.
+        self.cache_identity: str = f"openai:{self.base_url}:{self.model}"
         #: ``False`` once the server turned structured output down.
         self.structured_output: bool | None = None
 

@@ -2,8 +2,10 @@
 
 A record file is JSONL: one recorded call a line, an object with the keys
 ``backend, model, prompt, response, latency_s, prompt_tokens, completion_tokens,
-seed`` (UTF-8, non-ASCII kept as is). :class:`~llm_grop.llm.base.CallLog` appends to it
-through :func:`append_record`; the replay backend reads it with :func:`load_records`.
+seed``, and ``cached: true`` when the answer came from the LLM cache
+(:mod:`llm_grop.llm.cache`) (UTF-8, non-ASCII kept as is).
+:class:`~llm_grop.llm.base.CallLog` appends to it through :func:`append_record`; the
+replay backend reads it with :func:`load_records`.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from llm_grop.errors import BadInput, LLMError
 @dataclass(frozen=True)
 class LLMCallRecord:
     """One LLM call: the prompt, the response, latency in seconds, token counts and the
-    seed it was made with."""
+    seed it was made with. ``cached`` is true when the answer came from the LLM cache, not
+    the model (``latency_s`` then is the original call's)."""
 
     backend: str
     model: str
@@ -30,6 +33,7 @@ class LLMCallRecord:
     prompt_tokens: int | None = None
     completion_tokens: int | None = None
     seed: int | None = None
+    cached: bool = False
 
 
 _REQUIRED_STR = ("backend", "model", "prompt", "response")
@@ -42,7 +46,10 @@ def append_record(path: Path, record: LLMCallRecord) -> None:
     One ``write`` per line on a file opened for appending keeps lines whole even when
     the process dies right after; the parent directory is created if needed.
     """
-    line = json.dumps(asdict(record), ensure_ascii=False) + "\n"
+    data = asdict(record)
+    if not data["cached"]:
+        del data["cached"]  # lines stay as they were before the cache existed
+    line = json.dumps(data, ensure_ascii=False) + "\n"
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with path.open("a", encoding="utf-8") as handle:

@@ -8,7 +8,9 @@ records, and a replayed run differs from the recorded one only in ``backend``.
 
 from __future__ import annotations
 
-from dataclasses import replace
+import hashlib
+import json
+from dataclasses import asdict, replace
 from pathlib import Path
 
 from llm_grop.errors import BadInput, ReplayMissing
@@ -41,6 +43,10 @@ class ReplayLLM:
         self._served: dict[tuple[str, int | None], int] = {}
         models = dict.fromkeys(record.model for record in self.records)
         self.model: str = "+".join(models) or "none"
+        #: What the LLM cache keys this backend's answers by: the recorded file's content.
+        self.cache_identity: str = "replay:" + hashlib.sha256(
+            "\n".join(json.dumps(asdict(r), sort_keys=True) for r in self.records).encode()
+        ).hexdigest()[:32]
 
     def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
                  ) -> LLMCallRecord:

@@ -191,8 +191,10 @@ def sections(report: HumanReport) -> dict[str, Any]:
             ("single human ratings equal to the automatic rating", _fmt(a.exact, 2)),
             ("single human ratings within 1 of the automatic rating", _fmt(a.within_one, 2))],
         "paired_header": ("first", "second", "shared trials", "mean difference (first - second)",
-                          "Wilcoxon W", "p", "rank-biserial r"),
+                          "95 % bootstrap CI", "Wilcoxon W", "p", "rank-biserial r"),
         "paired": [(p.first, p.second, str(p.n), _fmt(p.mean_difference, 2),
+                    "-" if math.isnan(p.ci_low) else
+                    f"[{_fmt(p.ci_low, 2)}, {_fmt(p.ci_high, 2)}]",
                     _fmt(p.statistic, 1), _fmt(p.p_value, 4), _fmt(p.effect_size, 2))
                    for p in report.paired],
     }

@@ -123,6 +123,9 @@ class LLMCallDoc(Doc):
     prompt_tokens: Int | None = None
     completion_tokens: Int | None = None
     seed: Int | None = None
+    cached: bool | None = Field(None, description="true when the LLM cache answered the call "
+                                                  "(its latency is the original call's); "
+                                                  "absent otherwise")
 
 
 class LLMDoc(Doc):
@@ -314,6 +317,10 @@ class TrialRow(RunDoc):
     llm_prompt_tokens: Int
     llm_completion_tokens: Int
     llm_time_s: Seconds = Field(description="wall-clock seconds waiting for the LLM")
+    llm_cache_hits: Int | None = Field(None, description="LLM calls the cache answered (which "
+                                                         "trial asks first depends on "
+                                                         "scheduling); absent in rows "
+                                                         "written before 0.7")
     rating: Annotated[int, Strict(), Field(ge=1, le=5)]
     rating_explanation: RatingDoc
     image: Text | None = Field(None, description="the final table's picture, relative to "

@@ -12,7 +12,7 @@ from typing import Protocol
 
 class CallRecord(Protocol):
     """One LLM call as an arrangement keeps it: prompt, response, latency in seconds,
-    token counts and the call's seed."""
+    token counts, the call's seed, and whether the LLM cache answered it."""
 
     @property
     def prompt(self) -> str: ...
@@ -31,6 +31,9 @@ class CallRecord(Protocol):
 
     @property
     def seed(self) -> int | None: ...
+
+    @property
+    def cached(self) -> bool: ...
 
 
 @dataclass(frozen=True)

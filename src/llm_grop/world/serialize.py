@@ -54,7 +54,7 @@ def _object(p: Placement) -> ObjectDoc:
 def _call(c: CallRecord) -> LLMCallDoc:
     return LLMCallDoc(prompt=c.prompt, response=c.response, latency_s=round(c.latency_s, 4),
                       prompt_tokens=c.prompt_tokens, completion_tokens=c.completion_tokens,
-                      seed=c.seed)
+                      seed=c.seed, **({"cached": True} if c.cached else {}))
 
 
 def arrangement_doc(a: Arrangement, *, llm_log: bool = True) -> ArrangementDoc:

@@ -1,0 +1,205 @@
+"""Sweep files: a grid of bench experiments, each combination of its values one cell.
+
+A sweep file is YAML in the bench's terms. Its top level gives what every cell shares;
+``grid`` gives, for any of the same keys, a list of values, and the sweep runs every
+combination of them::
+
+    # chairs.yaml: 3 x 3 cells, each the paper's 640 episodes
+    tasks: paper
+    methods: tpra,latp,grop,llm-grop
+    trials: 20
+    images: false
+    llm: {backend: replay, replay: ../benchmarks/data/embedded_calls.jsonl}
+    grid:
+      chairs: [0, 1, 4]
+      table: [scene, 1.8x0.9m, round:1.2m]
+
+Keys (:class:`Values`): ``tasks``, ``methods``, ``trials``, ``seed``, ``scene``,
+``chairs``, ``table``, ``simulator``, ``feasibility``, ``weight``, ``fidelity_weight``,
+``llm`` (``backend``, ``model``, ``base_url``, ``replay``, ``temperature``, and a ``name``
+for the cell's directory), ``preferences`` and ``images``. A key left out takes the
+bench's default. Paths are relative to the sweep file. Each cell is an experiment
+directory named after its grid values (``chairs=4,table=round_1.2m``), resumable and
+refused if it holds another experiment's results, as ``llm-grop bench --out`` is.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
+
+from llm_grop.errors import BadInput
+from llm_grop.world.datafile import load_yaml_model
+
+#: Longest cell directory name, in characters (a file system allows 255 bytes).
+MAX_NAME = 120
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
+
+Text = Annotated[str, Field(min_length=1, max_length=500)]
+
+
+class LLMEntry(BaseModel):
+    """One LLM: the bench's ``--llm``, ``--model``, ``--base-url``, ``--replay`` and
+    ``--temperature``; ``name`` labels it in cell names (default: backend and model)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    backend: Text = "embedded"
+    model: Text | None = None
+    base_url: Text | None = None
+    replay: Text | None = None
+    temperature: Annotated[float, Field(ge=0, le=2)] = 0.1
+    name: Text | None = None
+
+    @property
+    def label(self) -> str:
+        """How the entry is named in a cell's name."""
+        return self.name or self.backend + (f"-{Path(self.model).name}" if self.model else "")
+
+
+class Values(BaseModel):
+    """One cell's settings, in the bench's terms (units: ``weight`` seconds,
+    ``fidelity_weight`` seconds per centimetre). ``chairs`` and ``table`` ``null`` (or
+    ``table: scene``) take the scene's own."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    tasks: Text | list[Annotated[int, Field(ge=0)]] = "paper"
+    methods: Text | list[Text] = "tpra,latp,grop,llm-grop"
+    trials: Annotated[int, Field(ge=1)] = 20
+    seed: Annotated[int, Field(ge=0)] = 0
+    scene: Text | None = None
+    chairs: Annotated[int, Field(ge=0)] | None = None
+    table: Text | None = None
+    simulator: Text = "kinematic2d"
+    feasibility: Text = "default"
+    weight: Annotated[float, Field(ge=0)] = 40.0
+    fidelity_weight: Annotated[float, Field(ge=0)] = 1.0
+    llm: LLMEntry = LLMEntry()
+    preferences: Text | None = None
+    images: bool = True
+
+
+def _grid_field(f: Any) -> tuple[Any, Any]:
+    """A :class:`Values` field as a grid key: a non-empty list of its values, each checked
+    as the field is."""
+    one = Annotated[(f.annotation, *f.metadata)] if f.metadata else f.annotation
+    return list[one] | None, Field(None, min_length=1)  # type: ignore[valid-type]
+
+
+#: What ``grid`` may vary: each key of :class:`Values`, as a non-empty list of its values.
+Grid = create_model(  # type: ignore[call-overload]
+    "Grid", __config__=ConfigDict(extra="forbid", frozen=True),
+    **{name: _grid_field(f) for name, f in Values.model_fields.items()})
+
+
+class SweepFile(Values):
+    """A sweep file: the values every cell shares, and the ``grid`` of those that vary."""
+
+    grid: Grid = Field(default_factory=Grid)  # type: ignore[valid-type]
+
+    @model_validator(mode="after")
+    def _set_once(self) -> SweepFile:
+        both = [k for k in self.grid.model_fields_set if k in self.model_fields_set]
+        if both:
+            raise ValueError(f"{both[0]!r} is both in grid and at the top level; "
+                             "give it in one place")
+        return self
+
+
+@dataclass(frozen=True)
+class SweepCell:
+    """One combination: its directory ``name``, the grid's ``axes`` (key -> the value's
+    label) and its :class:`Values`."""
+
+    name: str
+    axes: Mapping[str, str]
+    values: Values
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A sweep file read: where it lies (``base``, the directory its paths are relative
+    to), the grid's keys in the file's order, and every cell."""
+
+    path: Path
+    axes: tuple[str, ...]
+    cells: tuple[SweepCell, ...]
+
+    @property
+    def base(self) -> Path:
+        """The directory the file's paths are relative to."""
+        return self.path.parent
+
+
+def load_sweep(path: Path) -> Sweep:
+    """Read and expand the sweep file ``path``; :class:`BadInput` names the file and the
+    field for anything wrong."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise BadInput(f"{path}: sweep file not found") from None
+    except UnicodeDecodeError:
+        raise BadInput(f"{path}: not UTF-8 text") from None
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot read ({exc.strerror or exc})") from None
+    doc = load_yaml_model(text, str(path), SweepFile, "grid", "name")
+    raw_grid = _raw_grid(text)
+    axes = tuple(k for k in raw_grid if k in doc.grid.model_fields_set)
+    shared = {k: getattr(doc, k) for k in doc.model_fields_set if k != "grid"}
+    cells = []
+    for combo in itertools.product(*(getattr(doc.grid, k) for k in axes)):
+        chosen = dict(zip(axes, combo, strict=True))
+        labels = {k: _label(v) for k, v in chosen.items()}
+        cells.append(SweepCell(_name(labels), labels, Values(**shared, **chosen)))
+    seen: dict[str, SweepCell] = {}
+    for cell in cells:
+        if cell.name in seen:
+            raise BadInput(f"{path}: grid: two cells are both named {cell.name!r}; give "
+                           "each llm entry a distinct name")
+        seen[cell.name] = cell
+    return Sweep(path, axes, tuple(cells))
+
+
+def _raw_grid(text: str) -> list[str]:
+    """The grid's keys in the order the file gives them (the model's order is its own)."""
+    import yaml
+
+    raw = yaml.safe_load(text)
+    grid = raw.get("grid") if isinstance(raw, dict) else None
+    return list(grid) if isinstance(grid, dict) else []
+
+
+def _label(value: Any) -> str:
+    """A grid value as it reads in a cell's name."""
+    if isinstance(value, LLMEntry):
+        return value.label
+    if value is None:
+        return "scene"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, list):
+        return "+".join(map(_label, value))
+    return str(value)
+
+
+def _name(labels: Mapping[str, str]) -> str:
+    """A cell's directory name: ``key=value`` pairs joined by commas, made safe for a
+    file system; ``all`` for a sweep without a grid."""
+    if not labels:
+        return "all"
+    name = ",".join(f"{k}={_UNSAFE.sub('_', v).strip('.')}" for k, v in labels.items())
+    if len(name) > MAX_NAME:
+        import hashlib
+
+        name = name[:MAX_NAME - 9] + "-" + hashlib.sha256(name.encode()).hexdigest()[:8]
+    return name

@@ -1,0 +1,108 @@
+"""A content-addressed, on-disk cache of LLM answers, shared by every process on a machine.
+
+An answer is stored under the SHA-256 of everything that decides it: the backend, what it
+serves (:func:`backend_identity`: the model, the endpoint or the recorded file), the
+prompt, every sampling parameter and the seed, the grammar and the JSON Schema. Identical
+calls, made by different methods, trials, bench cells or worker processes, are answered
+once. Calls without a seed are never cached: an unseeded call is asked to differ.
+
+Layout: ``DIR/ab/abcdef....json``, one JSON object per answer (the key's fields and the
+call's record). A file is written beside its final name and renamed onto it
+(:func:`os.replace`), so concurrent writers on one machine never leave a half-written
+answer: a reader sees the whole file or none, and two writers of one key write the same
+answer. Nothing is ever rewritten or deleted; remove the directory to empty the cache.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import secrets
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from llm_grop.llm.record import LLMCallRecord
+
+log = logging.getLogger(__name__)
+
+#: The cache's directory when neither ``--cache-dir`` nor ``$LLM_GROP_CACHE_DIR`` is given.
+DEFAULT_DIR = Path("~/.cache/llm-grop/llm-calls")
+#: The environment variable that moves the default directory.
+ENV_DIR = "LLM_GROP_CACHE_DIR"
+#: Bumped when the key's meaning changes, so older entries are never read as newer ones.
+_FORMAT = 1
+
+
+def default_dir() -> Path:
+    """``$LLM_GROP_CACHE_DIR``, else ``~/.cache/llm-grop/llm-calls``."""
+    return Path(os.environ.get(ENV_DIR) or DEFAULT_DIR).expanduser()
+
+
+def backend_identity(llm: Any) -> str:
+    """What a backend answers from, for the cache key: its ``cache_identity`` when it has
+    one (the replay backend names its file's digest, openai its endpoint), else
+    ``backend:model``."""
+    own = getattr(llm, "cache_identity", None)
+    return str(own) if own else f"{llm.backend}:{llm.model}"
+
+
+@dataclass(frozen=True)
+class CallKey:
+    """Everything that decides an LLM's answer; ``digest`` addresses it in the cache."""
+
+    backend: str
+    identity: str
+    prompt: str
+    params: Mapping[str, Any]
+    grammar: str | None
+    schema: Mapping[str, Any] | None
+
+    @property
+    def digest(self) -> str:
+        """The SHA-256 (hex) of the key's canonical JSON."""
+        text = json.dumps({"format": _FORMAT, **asdict(self)}, sort_keys=True,
+                          ensure_ascii=False, separators=(",", ":"))
+        return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+class LLMCache:
+    """The answers under ``root`` (created on the first write)."""
+
+    def __init__(self, root: str | os.PathLike[str]) -> None:
+        self.root = Path(root).expanduser()
+
+    def _path(self, key: CallKey) -> Path:
+        digest = key.digest
+        return self.root / digest[:2] / f"{digest}.json"
+
+    def get(self, key: CallKey) -> LLMCallRecord | None:
+        """The answer stored for ``key``, marked ``cached``, or ``None``."""
+        path = self._path(key)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            record = LLMCallRecord(**data["record"])
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError, TypeError, KeyError) as exc:
+            # A damaged entry (a disk error, a hand edit) is asked again, not trusted.
+            log.warning("LLM cache: ignoring unreadable entry %s (%s)", path, exc)
+            return None
+        return replace(record, cached=True)
+
+    def put(self, key: CallKey, record: LLMCallRecord) -> None:
+        """Store ``record`` as the answer to ``key``; a failure to write is logged, never
+        raised (the call itself succeeded)."""
+        path = self._path(key)
+        data = {"key": asdict(key), "record": asdict(replace(record, cached=False))}
+        tmp = path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp.write_text(json.dumps(data, ensure_ascii=False), encoding="utf-8")
+            os.replace(tmp, path)
+        except OSError as exc:
+            log.warning("LLM cache: cannot write %s (%s)", path, exc.strerror or exc)
+            tmp.unlink(missing_ok=True)
