@@ -25,7 +25,8 @@ from pathlib import Path
 
 from common import RECORDING
 
-RUN_DEPENDENT = ("planning_time_s", "llm_time_s", "llm_cache_hits")
+from llm_grop.experiment.trial import RUN_DEPENDENT_FIELDS as RUN_DEPENDENT
+
 CHAIRS = (0, 1, 2, 4)
 WEIGHTS = (20, 40, 80, 160)
 
@@ -51,8 +52,10 @@ def run(executor: str, spec: Path, out: Path, workers: int) -> float:
     shutil.rmtree(out, ignore_errors=True)
     cache = out.with_name(out.name + "-cache")
     shutil.rmtree(cache, ignore_errors=True)
+    # Ray keeps its slots busy by itself; --workers would cap the trials in flight.
     cmd = [sys.executable, "-m", "llm_grop", "sweep", str(spec), "--out", str(out), "-q",
-           "--executor", executor, "--workers", str(workers), "--cache-dir", str(cache)]
+           "--executor", executor, "--cache-dir", str(cache),
+           *(["--workers", str(workers)] if executor == "local" else [])]
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True)
     return time.perf_counter() - t0

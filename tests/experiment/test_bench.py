@@ -191,3 +191,14 @@ def test_an_unwritable_cache_directory_is_refused_before_any_trial(tmp_path: Pat
     assert main(BASE + ["--out", str(tmp_path / "x"), "--cache-dir",
                         str(tmp_path / "file")]) == 2
     assert "--cache-dir" in _one_line_error(capsys) and not (tmp_path / "x").exists()
+
+
+def test_an_unusable_default_cache_is_left_out_with_a_warning(tmp_path: Path, monkeypatch,
+                                                              capsys) -> None:
+    (tmp_path / "file").write_text("")
+    monkeypatch.setenv("LLM_GROP_CACHE_DIR", str(tmp_path / "file"))
+    assert main(["bench", "--tasks", "1", "--trials", "1", "--methods", "llm-grop",
+                 "--llm", "replay", "--replay", str(RECORDING), "--no-images",
+                 "--out", str(tmp_path / "x")]) == 0
+    assert "no LLM cache: the default" in capsys.readouterr().err
+    assert [r["llm_cache_hits"] for r in _rows(tmp_path / "x")] == [0]

@@ -16,6 +16,8 @@ import pytest
 from llm_grop.cli import main
 from llm_grop.experiment.executors import EXECUTORS
 from llm_grop.experiment.trial import RUN_DEPENDENT_FIELDS
+from llm_grop.methods.base import ComposedMethod
+from llm_grop.methods.registry import METHODS, register_method
 from llm_grop.world.contract import json_schema
 
 RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"
@@ -144,3 +146,29 @@ def test_unreachable_ray_cluster_is_one_line(tmp_path: Path) -> None:
     assert proc.stderr.startswith("llm-grop: error: --executor ray: cannot reach the Ray "
                                   "cluster at 127.0.0.1:1: nothing answers at 127.0.0.1:1")
     assert proc.stderr.count("\n") == 1
+
+
+def test_a_failing_ray_task_is_one_line_naming_the_trial(ray_cluster, tmp_path: Path,
+                                                         capsys) -> None:
+    # A method registered from a module the Ray workers cannot import (this test module is
+    # on the driver's path only), as a node without a plugin would be.
+    register_method(NEEDS_A_MODULE)
+    try:
+        code = main(BASE + ["--out", str(tmp_path / "x"), "--executor", "ray", "--tasks", "1",
+                            "--trials", "1", "--methods", "needs-a-module"])
+    finally:
+        METHODS.unregister("needs-a-module")
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert code == 2, err
+    assert err.startswith("llm-grop: error: task 1 trial 0 needs-a-module: a Ray worker could "
+                          "not run it: ")
+    assert "No module named 'test_executors'" in err
+    assert err.endswith("(every node needs llm-grop, its plugins and the experiment's files)")
+
+
+class _Here(ComposedMethod):
+    """A method whose class lives in this test module."""
+
+
+NEEDS_A_MODULE = _Here("needs-a-module", "random arrangement", uses_llm=False,
+                       standing="utility", best_of_all=True)

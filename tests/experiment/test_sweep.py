@@ -132,7 +132,11 @@ def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> Non
     (SWEEP.replace(f"llm: {{backend: replay, replay: {RECORDING}}}\n", "").replace(
         "chairs: [0, 2]", "llm: [{backend: replay, replay: a.jsonl}, "
                           "{backend: replay, replay: b.jsonl}]"),
-     "two cells are both named 'weight=20,llm=replay'; give each llm entry a distinct name"),
+     "grid: two cells would share the directory 'weight=20,llm=replay'"),
+    (SWEEP.replace("chairs: [0, 2]", "table: [1.8x0.9m, 1.8X0.9m]"),
+     "grid: two cells would share the directory 'weight=20,table=1.8X0.9m'"),
+    (SWEEP.replace("chairs: [0, 2]", "chairs:"),
+     "grid.chairs has no values; give a list, or leave the key out"),
     ("grid: [1, 2]\n", "s.yaml: grid: expected an object"),
     ("tasks: [1\n", "s.yaml line 2: not valid YAML"),
 ])
@@ -158,3 +162,11 @@ def test_paths_are_relative_to_the_sweep_file(tmp_path: Path) -> None:
         "chairs: [0, 2]", "chairs: [0]").replace("[20, 40.5]", "[20]"))
     assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "-q"]) == 0
     assert len(_rows(tmp_path / "out" / "weight=20,chairs=0")) == 4
+
+
+def test_minus_v_logs_each_trial(tmp_path: Path, capsys) -> None:
+    path = tmp_path / "s.yaml"
+    path.write_text(SWEEP.replace("chairs: [0, 2]", "chairs: [0]").replace("[20, 40.5]",
+                                                                          "[20]"))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "-q", "-v"]) == 0
+    assert "task 1 trial 1 llm-grop: rating" in capsys.readouterr().err

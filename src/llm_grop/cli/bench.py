@@ -6,7 +6,7 @@ import time
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, overload
 
 import click
 
@@ -180,6 +180,13 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
     from llm_grop.world.scene_file import load_scene, set_target_top
     from llm_grop.world.tasks import load_tasks
 
+    # Absolute, so that workers on other machines find the same files.
+    scene_path, task_files, catalog_files = (
+        _absolute(scene_path), tuple(map(_absolute, task_files)),
+        tuple(map(_absolute, catalog_files)))
+    flags = flags | {"replay_path": _absolute(flags.get("replay_path"))}
+    if flags.get("model") and Path(flags["model"]).expanduser().is_file():
+        flags["model"] = str(_absolute(flags["model"]))  # a GGUF file
     check_out_dir("out", out_dir)  # before any model is loaded or trial run
     if not no_images and (out_dir / "images").exists() and not (out_dir / "images").is_dir():
         raise BadInput(f"--out {out_dir}: {out_dir / 'images'} is a file, where each "
@@ -214,6 +221,15 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
         images=None if no_images else str(out_dir / "images"), simulator=sim.name,
         feasibility=feasibility)
     return Experiment(tasks, trials, methods, settings, seed)
+
+
+@overload
+def _absolute(path: None) -> None: ...
+@overload
+def _absolute(path: str | Path) -> Path: ...
+def _absolute(path: str | Path | None) -> Path | None:
+    """``path`` made absolute (``~`` expanded), or ``None``."""
+    return None if path is None else Path(path).expanduser().absolute()
 
 
 class TrialProgress:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import secrets
 from collections.abc import Callable
@@ -15,6 +16,8 @@ from llm_grop.errors import BadInput
 from llm_grop.llm.registry import BACKENDS
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR
 from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
+
+log = logging.getLogger(__name__)
 
 EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
 
@@ -329,7 +332,7 @@ def execution_settings(executor: str, workers: int | None, ray_address: str | No
         create_executor,
         default_threads,
     )
-    from llm_grop.llm.cache import default_dir
+    from llm_grop.llm.cache import DEFAULT_DIR, ENV_DIR, default_dir
 
     name = EXECUTORS.key(executor)
     if ray_address is not None and name != "ray":
@@ -339,6 +342,13 @@ def execution_settings(executor: str, workers: int | None, ray_address: str | No
     threads = llm_threads or default_threads(name, workers)
     if no_cache:
         return made, threads, None
-    root = cache_dir if cache_dir is not None else default_dir()
-    check_out_dir("cache_dir", root)
-    return made, threads, str(root)
+    if cache_dir is not None:
+        check_out_dir("cache_dir", cache_dir)
+        return made, threads, str(cache_dir.expanduser().absolute())
+    try:
+        check_out_dir("cache_dir", default_dir())
+    except BadInput as exc:
+        log.warning("no LLM cache: the default %s", str(exc).removeprefix("--cache-dir "))
+        return made, threads, None
+    # As written, not expanded: each node of a cluster finds its own home's cache.
+    return made, threads, os.environ.get(ENV_DIR) or str(DEFAULT_DIR)

@@ -31,23 +31,47 @@ _FLAG = re.compile(r"^(--[a-z-]+)\b")
 
 
 def bench_params(values: Values, base: Path) -> dict[str, Any]:
-    """A sweep cell's values as ``bench``'s parameters (paths relative to ``base``)."""
+    """What a sweep cell's values set of ``bench``'s parameters (paths relative to
+    ``base``); a value left out is left to the bench's default."""
     def joined(v: str | list[Any]) -> str:
         return v if isinstance(v, str) else ",".join(map(str, v))
 
-    def path(p: str | None) -> Path | None:
-        return None if p is None else base / Path(p).expanduser()
+    def path(p: str) -> Path:
+        return base / Path(p).expanduser()
 
-    return {"tasks_text": joined(values.tasks), "methods_text": joined(values.methods),
-            "trials": values.trials, "seed": values.seed, "scene_path": path(values.scene),
-            "chairs": values.chairs,
-            "table": None if values.table in (None, "scene") else Table.parse(values.table),
-            "simulator": values.simulator, "feasibility": values.feasibility,
-            "w": values.weight, "fidelity_w": values.fidelity_weight,
-            "no_images": not values.images, "backend": values.llm.backend,
-            "model": values.llm.model, "base_url": values.llm.base_url,
-            "replay_path": path(values.llm.replay), "temperature": values.llm.temperature,
-            "preferences_file": path(values.preferences)}
+    given: dict[str, Any] = {
+        "trials": values.trials, "seed": values.seed, "chairs": values.chairs,
+        "simulator": values.simulator, "feasibility": values.feasibility,
+        "w": values.weight, "fidelity_w": values.fidelity_weight}
+    if values.tasks is not None:
+        given["tasks_text"] = joined(values.tasks)
+    if values.methods is not None:
+        given["methods_text"] = joined(values.methods)
+    if values.scene is not None:
+        given["scene_path"] = path(values.scene)
+    if values.table not in (None, "scene"):
+        given["table"] = Table.parse(values.table)
+    if values.images is not None:
+        given["no_images"] = not values.images
+    if values.preferences is not None:
+        given["preferences_file"] = path(values.preferences)
+    llm = values.llm
+    if llm is not None:
+        given |= {"backend": llm.backend, "base_url": llm.base_url,
+                  "temperature": llm.temperature}
+        if llm.replay is not None:
+            given["replay_path"] = path(llm.replay)
+        if llm.model is not None:
+            # A GGUF file (embedded) is a path; a model's name is not.
+            gguf = llm.backend in (None, "embedded") and llm.model.lower().endswith(".gguf")
+            given["model"] = str(path(llm.model)) if gguf else llm.model
+    return {k: v for k, v in given.items() if v is not None}
+
+
+def bench_defaults() -> dict[str, Any]:
+    """``bench``'s parameters as its flags leave them when none is given (parsed under
+    this command's context, so that ``-v`` keeps its count)."""
+    return dict(bench.make_context("bench", [], parent=click.get_current_context()).params)
 
 
 def _in_file(exc: BadInput, where: str) -> BadInput:
@@ -85,7 +109,7 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
                        "or new directory")
     plan = load_sweep(sweep_file)
     executor, threads, cache = execution_settings(**flags)
-    defaults = bench.make_context("bench", []).params
+    defaults = bench_defaults()
     cells = []
     for cell in plan.cells:
         try:
@@ -111,7 +135,7 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
         console.print(f"interrupted: {saved} finished trial(s) are saved in {out_dir}; "
                       "rerun the same command to resume")
         raise click.exceptions.Exit(130)
-    reports = write_sweep_reports(out_dir, plan)
+    reports = write_sweep_reports(out_dir, plan, [c.experiment.seed for c in cells])
     if not quiet:
         out = Console()
         headers, rows = sweep_rows(plan, reports)

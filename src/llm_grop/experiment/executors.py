@@ -124,7 +124,7 @@ class LocalExecutor:
 
 
 def describe(executor: Executor) -> str:
-    """How ``executor`` runs trials, for a summary line: ``2 local workers``, ``Ray``."""
+    """How ``executor`` runs trials, for a summary line: ``2 local workers``, ``ray``."""
     workers = getattr(executor, "workers", None)
     if executor.name == "local":
         return f"{workers} local worker{'s' if workers != 1 else ''}"

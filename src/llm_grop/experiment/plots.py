@@ -195,8 +195,10 @@ def _n_label(summary: Summary, task: int) -> str:
     return f"n = {counts[0]}" if len(counts) == 1 else f"n = {counts[0]}–{counts[-1]}"
 
 
-#: Inches of the sweep figure's width per cell, and its height (two panels).
+#: Inches of the sweep figure's width per cell, its widest (Agg draws at most 2**16
+#: pixels a side; beyond it the cells' bars only narrow), and its height (two panels).
 SWEEP_IN_PER_CELL = 0.9
+SWEEP_MAX_WIDTH_IN = 120.0
 SWEEP_HEIGHT_IN = 6.4
 
 
@@ -209,7 +211,8 @@ def plot_sweep(cells: Sequence[tuple[str, Summary]], path: str | Path) -> None:
     path = _png_path(path)
     methods = tuple(dict.fromkeys(m for _, s in cells for m in s.method_names))
     styles = method_styles(methods)
-    width_in = max(BARS_FIGSIZE_IN[0] * 0.6, 1.5 + SWEEP_IN_PER_CELL * len(cells))
+    width_in = min(SWEEP_MAX_WIDTH_IN,
+                   max(BARS_FIGSIZE_IN[0] * 0.6, 1.5 + SWEEP_IN_PER_CELL * len(cells)))
     with matplotlib.rc_context(STYLE):
         fig = _new_figure((width_in, SWEEP_HEIGHT_IN))
         left = 0.9 / width_in

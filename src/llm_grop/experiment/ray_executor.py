@@ -10,8 +10,9 @@ catalogs, tasks) at the same paths.
 * **Tasks.** A task runs one trial and reserves ``cpus_per_trial`` CPUs (fractions let
   trials that wait on a remote LLM share a CPU). Each Ray worker process keeps its trial
   runners (:class:`~llm_grop.experiment.worker.Runners`), so a model loads once per worker,
-  not once per trial. At most ``workers`` tasks are in flight (the cluster's CPUs over
-  ``cpus_per_trial`` by default), so a sweep of a million trials never queues a million.
+  not once per trial. At most ``workers`` tasks are in flight (by default twice the
+  cluster's CPUs over ``cpus_per_trial``, so no slot waits for the driver), so a sweep of
+  a million trials never queues a million.
 * **Pictures** travel back to the driver with the task's result and the driver writes them
   into the results directory: the nodes need no shared file system.
 * **Results.** The driver alone appends to ``trials.jsonl``. On Ctrl-C or an error it
@@ -75,9 +76,10 @@ class RayExecutor:
         pending: dict[Any, Job] = {}
         try:
             remote = ray.remote(num_cpus=self.options.cpus_per_trial, max_retries=0)(_trial)
-            slots = self.options.workers or max(
+            # --workers caps the trials in flight; without it the cluster's slots are kept
+            # busy, with work queued so a worker never waits for the driver.
+            window = self.options.workers or _IN_FLIGHT_PER_SLOT * max(
                 1, int(ray.cluster_resources().get("CPU", 1) / self.options.cpus_per_trial))
-            window = slots * _IN_FLIGHT_PER_SLOT
             shared = ray.put(dict(registered))
             queue = iter(jobs)
             while True:
@@ -89,9 +91,17 @@ class RayExecutor:
                 ready, rest = ray.wait(waiting, num_returns=1)
                 if rest:  # whatever else has finished meanwhile, without waiting
                     ready += ray.wait(rest, num_returns=len(rest), timeout=0)[0]
+                failed: Exception | None = None
                 for ref in ready:
-                    del pending[ref]
-                    yield self._result(ref)
+                    job = pending.pop(ref)
+                    try:
+                        done = self._result(ref, job)
+                    except Exception as exc:  # noqa: BLE001 - raised once the others are in
+                        failed = failed or exc
+                        continue
+                    yield done
+                if failed is not None:
+                    raise failed
         finally:
             for ref in pending:
                 ray.cancel(ref, force=True)
@@ -124,18 +134,40 @@ class RayExecutor:
                            f"{' '.join(str(exc).split())[:200]}") from None
         return True
 
-    def _result(self, ref: Any) -> Done:
-        """The task's :class:`Done`; llm-grop's own errors in a task are raised as they
-        are, so the command prints their one line."""
+    def _result(self, ref: Any, job: Job) -> Done:
+        """The task's :class:`Done`. A failure is one line naming the trial: llm-grop's own
+        errors as they are, a worker that could not import or read what the trial needs
+        as bad input, a worker or node that died likewise; anything else is raised as the
+        task raised it."""
         ray = self._ray
+        spec = job.spec
+        where = f"task {spec.task} trial {spec.trial} {spec.method}"
         try:
             done: Done = ray.get(ref)
-        except ray.exceptions.RayTaskError as exc:
+        except ray.exceptions.RayError as exc:
+            # A task's own exception is its cause; a system error (its arguments could not
+            # be read: a module the node lacks) has none.
             cause = getattr(exc, "cause", None)
             if isinstance(cause, LLMGropError):
                 raise cause from None
-            raise
+            system = ray.exceptions.RaySystemError
+            setup = isinstance(cause, ImportError | OSError | system) or (
+                cause is None and isinstance(exc, system))
+            if setup:
+                raise BadInput(f"{where}: a Ray worker could not run it: "
+                               f"{_line(cause or exc)} (every node needs llm-grop, its "
+                               "plugins and the experiment's files)") from None
+            if isinstance(cause, Exception):
+                raise cause from None
+            raise LLMGropError(f"{where}: the Ray worker running it failed: "
+                               f"{_line(exc)}") from None
         return done
+
+
+def _line(exc: BaseException) -> str:
+    """``Type: the first line of the message``, at most 200 characters."""
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}"[:200]
 
 
 #: Seconds to wait for a Ray cluster's port before calling it unreachable.

@@ -47,7 +47,7 @@ from llm_grop.llm.registry import BACKENDS
 from llm_grop.methods.registry import METHODS
 from llm_grop.simulation.registry import SIMULATORS
 from llm_grop.world.contract import TrialRow
-from llm_grop.world.jsonio import write_json
+from llm_grop.world.jsonio import write_bytes, write_json
 from llm_grop.world.serialize import read_doc
 
 log = logging.getLogger(__name__)
@@ -251,8 +251,10 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
     try:
         for finished in results:
             cell = cells[finished.cell]
+            images = cell.experiment.settings.images
             for rel, data in finished.pictures:
-                _write_atomically(cell.out / rel, data)
+                if images is not None:
+                    write_bytes(Path(images) / Path(rel).name, data)
             _append(cell.out / ROWS, finished.row)
             ran[finished.cell] += 1
             row = finished.row
@@ -282,13 +284,6 @@ def _append(path: Path, row: TrialRow) -> None:
         f.write(_line(row))
         f.flush()
         os.fsync(f.fileno())
-
-
-def _write_atomically(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a file beside it, renamed into place."""
-    tmp = path.with_name(f".{path.name}.part")
-    tmp.write_bytes(data)
-    tmp.replace(path)
 
 
 def _rewrite(out: Path, rows: list[TrialRow]) -> None:

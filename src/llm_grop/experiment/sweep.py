@@ -47,44 +47,47 @@ Text = Annotated[str, Field(min_length=1, max_length=500)]
 
 class LLMEntry(BaseModel):
     """One LLM: the bench's ``--llm``, ``--model``, ``--base-url``, ``--replay`` and
-    ``--temperature``; ``name`` labels it in cell names (default: backend and model)."""
+    ``--temperature`` (a key left out takes the bench's default); ``name`` labels it in
+    cell names (default: backend and model)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    backend: Text = "embedded"
+    backend: Text | None = None
     model: Text | None = None
     base_url: Text | None = None
     replay: Text | None = None
-    temperature: Annotated[float, Field(ge=0, le=2)] = 0.1
+    temperature: Annotated[float, Field(ge=0, le=2)] | None = None
     name: Text | None = None
 
     @property
     def label(self) -> str:
         """How the entry is named in a cell's name."""
-        return self.name or self.backend + (f"-{Path(self.model).name}" if self.model else "")
+        return self.name or (self.backend or "embedded") + (
+            f"-{Path(self.model).name}" if self.model else "")
 
 
 class Values(BaseModel):
     """One cell's settings, in the bench's terms (units: ``weight`` seconds,
-    ``fidelity_weight`` seconds per centimetre). ``chairs`` and ``table`` ``null`` (or
-    ``table: scene``) take the scene's own."""
+    ``fidelity_weight`` seconds per centimetre). A key left out, or ``null``, takes the
+    bench's default; for ``chairs`` and ``table`` (also ``table: scene``) that is the
+    scene's own."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    tasks: Text | list[Annotated[int, Field(ge=0)]] = "paper"
-    methods: Text | list[Text] = "tpra,latp,grop,llm-grop"
-    trials: Annotated[int, Field(ge=1)] = 20
-    seed: Annotated[int, Field(ge=0)] = 0
+    tasks: Text | list[Annotated[int, Field(ge=0)]] | None = None
+    methods: Text | list[Text] | None = None
+    trials: Annotated[int, Field(ge=1)] | None = None
+    seed: Annotated[int, Field(ge=0)] | None = None
     scene: Text | None = None
     chairs: Annotated[int, Field(ge=0)] | None = None
     table: Text | None = None
-    simulator: Text = "kinematic2d"
-    feasibility: Text = "default"
-    weight: Annotated[float, Field(ge=0)] = 40.0
-    fidelity_weight: Annotated[float, Field(ge=0)] = 1.0
-    llm: LLMEntry = LLMEntry()
+    simulator: Text | None = None
+    feasibility: Text | None = None
+    weight: Annotated[float, Field(ge=0)] | None = None
+    fidelity_weight: Annotated[float, Field(ge=0)] | None = None
+    llm: LLMEntry | None = None
     preferences: Text | None = None
-    images: bool = True
+    images: bool | None = None
 
 
 def _grid_field(f: Any) -> tuple[Any, Any]:
@@ -107,6 +110,10 @@ class SweepFile(Values):
 
     @model_validator(mode="after")
     def _set_once(self) -> SweepFile:
+        empty = [k for k in self.grid.model_fields_set if getattr(self.grid, k) is None]
+        if empty:
+            raise ValueError(f"grid.{empty[0]} has no values; give a list, or leave the key "
+                             "out")
         both = [k for k in self.grid.model_fields_set if k in self.model_fields_set]
         if both:
             raise ValueError(f"{both[0]!r} is both in grid and at the top level; "
@@ -151,25 +158,28 @@ def load_sweep(path: Path) -> Sweep:
     except OSError as exc:
         raise BadInput(f"{path}: cannot read ({exc.strerror or exc})") from None
     doc = load_yaml_model(text, str(path), SweepFile, "grid", "name")
-    raw_grid = _raw_grid(text)
-    axes = tuple(k for k in raw_grid if k in doc.grid.model_fields_set)
+    axes = tuple(k for k in _raw_grid(text) if k in doc.grid.model_fields_set)
     shared = {k: getattr(doc, k) for k in doc.model_fields_set if k != "grid"}
     cells = []
     for combo in itertools.product(*(getattr(doc.grid, k) for k in axes)):
         chosen = dict(zip(axes, combo, strict=True))
-        labels = {k: _label(v) for k, v in chosen.items()}
+        labels = {k: _label(k, v) for k, v in chosen.items()}
         cells.append(SweepCell(_name(labels), labels, Values(**shared, **chosen)))
     seen: dict[str, SweepCell] = {}
     for cell in cells:
-        if cell.name in seen:
-            raise BadInput(f"{path}: grid: two cells are both named {cell.name!r}; give "
-                           "each llm entry a distinct name")
-        seen[cell.name] = cell
+        # Case-blind: on some file systems two such names are one directory.
+        other = seen.get(cell.name.casefold())
+        if other is not None:
+            raise BadInput(f"{path}: grid: two cells would share the directory "
+                           f"{cell.name!r} ({dict(other.axes)} and {dict(cell.axes)}); make "
+                           "the values distinct (an llm entry takes a name)")
+        seen[cell.name.casefold()] = cell
     return Sweep(path, axes, tuple(cells))
 
 
 def _raw_grid(text: str) -> list[str]:
-    """The grid's keys in the order the file gives them (the model's order is its own)."""
+    """The grid's keys in the order the file gives them (the model's order is its own;
+    the small file is parsed again rather than threading the raw mapping through)."""
     import yaml
 
     raw = yaml.safe_load(text)
@@ -177,18 +187,18 @@ def _raw_grid(text: str) -> list[str]:
     return list(grid) if isinstance(grid, dict) else []
 
 
-def _label(value: Any) -> str:
-    """A grid value as it reads in a cell's name."""
+def _label(key: str, value: Any) -> str:
+    """The grid value ``value`` of ``key`` as it reads in a cell's name."""
     if isinstance(value, LLMEntry):
         return value.label
     if value is None:
-        return "scene"
+        return "scene" if key in ("chairs", "table", "scene") else "default"
     if isinstance(value, bool):
         return "yes" if value else "no"
     if isinstance(value, float):
         return f"{value:g}"
     if isinstance(value, list):
-        return "+".join(map(_label, value))
+        return "+".join(_label(key, v) for v in value)
     return str(value)
 
 

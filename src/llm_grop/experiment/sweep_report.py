@@ -32,13 +32,13 @@ class CellReport:
     report: Report
 
 
-def write_sweep_reports(out: Path, sweep: Sweep) -> list[CellReport]:
+def write_sweep_reports(out: Path, sweep: Sweep, seeds: Sequence[int]) -> list[CellReport]:
     """Write every cell's reports into its directory (from its rows, one cell in memory
-    at a time), then the sweep's own into ``out``."""
+    at a time; ``seeds`` are the cells' experiments' seeds), then the sweep's own into
+    ``out``."""
     reports = [CellReport(cell.name, dict(cell.axes),
-                          write_reports(out / cell.name, read_rows(out / cell.name),
-                                        cell.values.seed))
-               for cell in sweep.cells]
+                          write_reports(out / cell.name, read_rows(out / cell.name), seed))
+               for cell, seed in zip(sweep.cells, seeds, strict=True)]
     write_json(out / "summary.json", sweep_to_dict(sweep, reports))
     (out / "summary.md").write_text(sweep_markdown(sweep, reports), encoding="utf-8")
     plot_sweep([(r.name, r.report.summary) for r in reports], out / "fig_sweep.png")

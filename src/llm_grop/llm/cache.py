@@ -4,7 +4,10 @@ An answer is stored under the SHA-256 of everything that decides it: the backend
 serves (:func:`backend_identity`: the model, the endpoint or the recorded file), the
 prompt, every sampling parameter and the seed, the grammar and the JSON Schema. Identical
 calls, made by different methods, trials, bench cells or worker processes, are answered
-once. Calls without a seed are never cached: an unseeded call is asked to differ.
+once. Calls without a seed are never cached: an unseeded call is asked to differ. Neither
+are calls to a backend that does not say what its answers depend on
+(:func:`backend_identity`). A replay file that holds several answers to one call is
+answered with the first it served.
 
 Layout: ``DIR/ab/abcdef....json``, one JSON object per answer (the key's fields and the
 call's record). A file is written beside its final name and renamed onto it
@@ -42,12 +45,13 @@ def default_dir() -> Path:
     return Path(os.environ.get(ENV_DIR) or DEFAULT_DIR).expanduser()
 
 
-def backend_identity(llm: Any) -> str:
-    """What a backend answers from, for the cache key: its ``cache_identity`` when it has
-    one (the replay backend names its file's digest, openai its endpoint), else
-    ``backend:model``."""
+def backend_identity(llm: Any) -> str | None:
+    """What a backend answers from, for the cache key: its ``cache_identity`` (the
+    embedded backend names its model file and llama.cpp's version, openai its endpoint
+    and model, replay its recording's digest). ``None``, and so no caching, for a backend
+    without one: a plugin opts in by saying what its answers depend on."""
     own = getattr(llm, "cache_identity", None)
-    return str(own) if own else f"{llm.backend}:{llm.model}"
+    return str(own) if own else None
 
 
 @dataclass(frozen=True)
@@ -98,6 +102,8 @@ class LLMCache:
         raised (the call itself succeeded)."""
         path = self._path(key)
         data = {"key": asdict(key), "record": asdict(replace(record, cached=False))}
+        # Not world.jsonio's writer: the LLM layer stands below the world. No fsync: an
+        # entry lost to a power cut is only asked again.
         tmp = path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
         try:
             path.parent.mkdir(parents=True, exist_ok=True)

@@ -43,6 +43,13 @@ def write_json(path: str | Path, data: Mapping[str, Any]) -> None:
 
 def write_text(path: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically, as :func:`write_json` does."""
+    write_bytes(path, text.encode("utf-8"))
+
+
+def write_bytes(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically, as :func:`write_json` does: a temporary file
+    of its own beside it (so concurrent writers of one path never meet), synced, then
+    renamed over it."""
     path = Path(path)
     try:
         fd, name = tempfile.mkstemp(prefix=f".{path.name[:_TMP_NAME_CHARS]}.", suffix=".tmp",
@@ -51,8 +58,8 @@ def write_text(path: str | Path, text: str) -> None:
         raise BadInput(f"{path}: cannot write ({exc.strerror or exc})") from None
     tmp = Path(name)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, _mode_for(path))
