@@ -48,7 +48,10 @@ def rows(out: Path) -> dict[tuple[str, int, int, str], dict]:
     return found
 
 
-def run(executor: str, spec: Path, out: Path, workers: int) -> float:
+def run(executor: str, spec: Path, out: Path, workers: int, reuse: bool) -> float:
+    wall_file = out.with_name(out.name + ".wall")
+    if reuse and wall_file.exists():
+        return float(wall_file.read_text())
     shutil.rmtree(out, ignore_errors=True)
     cache = out.with_name(out.name + "-cache")
     shutil.rmtree(cache, ignore_errors=True)
@@ -58,7 +61,9 @@ def run(executor: str, spec: Path, out: Path, workers: int) -> float:
            *(["--workers", str(workers)] if executor == "local" else [])]
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    wall_file.write_text(f"{wall:.3f}\n")
+    return wall
 
 
 def main() -> None:
@@ -71,13 +76,15 @@ def main() -> None:
     ap.add_argument("--latency-s", type=float, default=2.0,
                     help="a live LLM's seconds per call, for the projection")
     ap.add_argument("--target-hours", type=float, default=24.0)
+    ap.add_argument("--reuse", action="store_true",
+                    help="report on the runs already in --out instead of running them again")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     spec = args.out / "sweep.yaml"
     sweep_file(spec, args.trials, args.images)
     walls, found = {}, {}
     for executor in args.executors.split(","):
-        walls[executor] = run(executor, spec, args.out / executor, args.workers)
+        walls[executor] = run(executor, spec, args.out / executor, args.workers, args.reuse)
         found[executor] = rows(args.out / executor)
         print(f"{executor}: {len(found[executor])} episodes in {walls[executor]:.1f} s",
               flush=True)
@@ -103,27 +110,27 @@ def main() -> None:
               f"{total} | {hits} | {100 * hits / max(total, 1):.1f} % | "
               f"{'yes' if same else 'NO'} |")
     # The projection: CPU seconds per episode from the local run, LLM calls per episode
-    # from the rows, the cache's measured hit rate, and a stated latency per call.
+    # from the rows, and a stated latency per call; with no cache hit (every call new: a
+    # sweep over LLMs or seeds) and with this sweep's hit rate (grids over other settings
+    # share the LLM's answers).
     cpu_s = walls.get("local", next(iter(walls.values()))) * args.workers / n
     hits = sum(r["llm_cache_hits"] for r in found[first].values())
-    asked = (calls - hits) / n
-    wait_s = asked * args.latency_s
-    episodes = 1_000_000
-    busy_s = episodes * (cpu_s + wait_s)
-    workers = math.ceil(busy_s / (args.target_hours * 3600))
-    cpus = math.ceil(episodes * cpu_s / (args.target_hours * 3600))
+    episodes, seconds = 1_000_000, args.target_hours * 3600
     print(f"\nmeasured: {cpu_s * 1000:.0f} ms of one CPU per episode; {calls / n:.2f} LLM "
-          f"calls per episode, {asked:.2f} of them asked (cache hit rate "
-          f"{100 * hits / max(calls, 1):.1f} %)")
-    print(f"1,000,000 episodes with a live LLM at {args.latency_s:g} s per call: "
-          f"{wait_s:.2f} s waiting + {cpu_s:.3f} s computing per episode = "
-          f"{busy_s / 3600:,.0f} worker-hours")
-    print(f"  in {args.target_hours:g} h: {workers} workers in flight (Ray tasks with "
-          f"--cpus-per-trial {cpus / workers:.2f}, i.e. {cpus} CPUs), and an LLM server "
-          f"answering {episodes * asked / (args.target_hours * 3600):.1f} calls per second")
-    for w in (100, 1000):
-        print(f"  with {w} workers: {busy_s / w / 3600:,.1f} h")
-
+          f"calls per episode; cache hit rate {100 * hits / max(calls, 1):.1f} %")
+    print(f"1,000,000 episodes, a live LLM at {args.latency_s:g} s per call, in "
+          f"{args.target_hours:g} h:")
+    print("| LLM calls asked | per episode: waiting + computing (s) | worker-hours | "
+          "trials in flight | CPUs | LLM calls per second | with 100 / 1,000 in flight |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for label, asked in (("every call (no hit)", calls / n),
+                         (f"misses only ({100 * hits / max(calls, 1):.1f} % hits)",
+                          (calls - hits) / n)):
+        busy_s = episodes * (cpu_s + asked * args.latency_s)
+        print(f"| {label} | {asked * args.latency_s:.2f} + {cpu_s:.3f} | {busy_s / 3600:,.0f} | "
+              f"{math.ceil(busy_s / seconds)} | {math.ceil(episodes * cpu_s / seconds)} | "
+              f"{episodes * asked / seconds:.1f} | {busy_s / 100 / 3600:,.1f} h / "
+              f"{busy_s / 1000 / 3600:,.2f} h |")
 
 if __name__ == "__main__":
     main()

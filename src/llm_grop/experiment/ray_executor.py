@@ -7,12 +7,15 @@ it running. Every node must have llm-grop installed, with the same version and p
 the driver, and must reach the files the experiment names (a scene, a replay recording,
 catalogs, tasks) at the same paths.
 
-* **Tasks.** A task runs one trial and reserves ``cpus_per_trial`` CPUs (fractions let
-  trials that wait on a remote LLM share a CPU). Each Ray worker process keeps its trial
-  runners (:class:`~llm_grop.experiment.worker.Runners`), so a model loads once per worker,
-  not once per trial. At most ``workers`` tasks are in flight (by default twice the
-  cluster's CPUs over ``cpus_per_trial``, so no slot waits for the driver), so a sweep of
-  a million trials never queues a million.
+* **Tasks.** A task runs a batch of up to :data:`MAX_BATCH` trials one after another and
+  streams each one's result back as it ends (a Ray streaming generator), so a worker waits
+  for Ray's scheduler once a batch, and the driver still writes each trial when it ends.
+  A task reserves ``cpus_per_trial`` CPUs (fractions let trials that wait on a remote LLM
+  share a CPU). Each Ray worker process keeps its trial runners
+  (:class:`~llm_grop.experiment.worker.Runners`), so a model loads once per worker, not
+  once per trial. At most ``workers`` tasks run at once (by default the cluster's CPUs over
+  ``cpus_per_trial``, each with a batch queued behind it), so a sweep of a million trials
+  never queues a million.
 * **Pictures** travel back to the driver with the task's result and the driver writes them
   into the results directory: the nodes need no shared file system.
 * **Results.** The driver alone appends to ``trials.jsonl``. On Ctrl-C or an error it
@@ -26,6 +29,7 @@ from __future__ import annotations
 import logging
 import math
 import socket
+from collections import deque
 from collections.abc import Iterator, Sequence
 from typing import Any
 
@@ -36,17 +40,22 @@ from llm_grop.experiment.worker import Done, Job, Runners, run_job
 
 log = logging.getLogger(__name__)
 
-#: Tasks in flight per task slot, so a worker never waits for the driver to hand it work.
+#: Batches in flight per task slot, so a worker never waits for the driver to hand it work.
 _IN_FLIGHT_PER_SLOT = 2
+#: Trials one task runs at most, one after another, streaming each one's result back as it
+#: ends: a worker waits for Ray's scheduler once a batch rather than once a trial.
+MAX_BATCH = 8
 
 # Each Ray worker process keeps its own runners.
 _RUNNERS = Runners()
 
 
-def _trial(job: Job, registered: Registered) -> Done:
-    """A Ray task: one trial, its pictures shipped back."""
+def _trials(jobs: list[Job], registered: Registered) -> Iterator[Done]:
+    """A Ray task (a streaming generator): each trial of ``jobs`` in turn, its pictures
+    shipped back, yielded as it ends."""
     plugins.restore(registered)  # cheap, and a worker may serve several drivers
-    return run_job(job, _RUNNERS, ship_pictures=True)
+    for job in jobs:
+        yield run_job(job, _RUNNERS, ship_pictures=True)
 
 
 class RayExecutor:
@@ -73,27 +82,37 @@ class RayExecutor:
             return
         ray = self._ray
         started = self._connect()
-        pending: dict[Any, Job] = {}
+        streams: dict[Any, deque[Job]] = {}
         try:
-            remote = ray.remote(num_cpus=self.options.cpus_per_trial, max_retries=0)(_trial)
-            # --workers caps the trials in flight; without it the cluster's slots are kept
-            # busy, with work queued so a worker never waits for the driver.
+            remote = ray.remote(num_cpus=self.options.cpus_per_trial, max_retries=0,
+                                num_returns="streaming")(_trials)
+            # --workers caps the batches, so the trials, running at once; without it the
+            # cluster's slots are kept busy, with a batch queued behind each.
             window = self.options.workers or _IN_FLIGHT_PER_SLOT * max(
                 1, int(ray.cluster_resources().get("CPU", 1) / self.options.cpus_per_trial))
             shared = ray.put(dict(registered))
-            queue = iter(jobs)
+            queue = deque(jobs)
             while True:
-                while len(pending) < window and (job := next(queue, None)) is not None:
-                    pending[remote.remote(job, shared)] = job
-                if not pending:
+                while len(streams) < window and queue:
+                    # Batches shrink as the queue does, so that no worker ends long after
+                    # the others.
+                    size = max(1, min(MAX_BATCH, len(queue) // (2 * window)))
+                    batch = [queue.popleft() for _ in range(size)]
+                    streams[remote.remote(batch, shared)] = deque(batch)
+                if not streams:
                     break
-                waiting = list(pending)
-                ready, rest = ray.wait(waiting, num_returns=1)
-                if rest:  # whatever else has finished meanwhile, without waiting
-                    ready += ray.wait(rest, num_returns=len(rest), timeout=0)[0]
+                ready, _ = ray.wait(list(streams), num_returns=1)
                 failed: Exception | None = None
-                for ref in ready:
-                    job = pending.pop(ref)
+                for stream in ready:
+                    waiting = streams[stream]
+                    try:
+                        ref = next(stream)
+                    except StopIteration:  # ended before its batch did: run the rest again
+                        queue.extendleft(reversed(streams.pop(stream)))
+                        continue
+                    job = waiting.popleft()
+                    if not waiting:
+                        del streams[stream]
                     try:
                         done = self._result(ref, job)
                     except Exception as exc:  # noqa: BLE001 - raised once the others are in
@@ -103,8 +122,8 @@ class RayExecutor:
                 if failed is not None:
                     raise failed
         finally:
-            for ref in pending:
-                ray.cancel(ref, force=True)
+            for stream in streams:
+                ray.cancel(stream, force=True)
             if started:
                 ray.shutdown()
 
