@@ -59,7 +59,7 @@ def _trials(jobs: list[Job], registered: Registered) -> Iterator[Done]:
 
 
 class RayExecutor:
-    """Runs each trial as a Ray task (see the module's documentation)."""
+    """Runs trials as Ray tasks, a batch each (see the module's documentation)."""
 
     name = "ray"
     spawns = True
@@ -107,9 +107,12 @@ class RayExecutor:
                     waiting = streams[stream]
                     try:
                         ref = next(stream)
-                    except StopIteration:  # ended before its batch did: run the rest again
-                        queue.extendleft(reversed(streams.pop(stream)))
-                        continue
+                    except StopIteration:
+                        # Ray reports a failed batch as an error in its stream, never so.
+                        spec = waiting[0].spec
+                        raise LLMGropError(f"task {spec.task} trial {spec.trial} "
+                                           f"{spec.method}: its Ray task ended without a "
+                                           "result") from None
                     job = waiting.popleft()
                     if not waiting:
                         del streams[stream]
