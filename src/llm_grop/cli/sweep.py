@@ -94,11 +94,10 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
     """Run a grid of bench experiments (tasks, methods, chairs, tables, simulators, LLMs,
     weights, trials) from a sweep file, each cell in a directory of its own."""
     from rich.console import Console
-    from rich.markup import escape
-    from rich.table import Table as RichTable
 
     from llm_grop.experiment.executors import describe
     from llm_grop.experiment.runner import Cell, run_cells
+    from llm_grop.experiment.summary import rich_table
     from llm_grop.experiment.sweep import load_sweep
     from llm_grop.experiment.sweep_report import sweep_rows, write_sweep_reports
     from llm_grop.world.jsonio import write_json
@@ -138,15 +137,9 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
     reports = write_sweep_reports(out_dir, plan, [c.experiment.seed for c in cells])
     if not quiet:
         out = Console()
-        headers, rows = sweep_rows(plan, reports)
-        table = RichTable(title=f"Sweep {plan.path.name}: {len(reports)} cell(s), mean ± "
-                                "standard error", title_justify="left")
-        for k, header in enumerate(headers):
-            table.add_column(escape(header), justify="left" if k <= len(plan.axes) else
-                             "right")
-        for row in rows:
-            table.add_row(*(escape(c) for c in row))
-        out.print(table)
+        out.print(rich_table(f"Sweep {plan.path.name}: {len(reports)} cell(s), mean ± "
+                             "standard error", *sweep_rows(plan, reports),
+                             left=len(plan.axes) + 1))
         ran = sum(o.ran for o in outcomes)
         done = sum(o.skipped for o in outcomes)
         out.print(f"{ran} trial(s) run, {done} already done, {wall:.1f} s on "

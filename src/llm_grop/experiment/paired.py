@@ -89,17 +89,17 @@ def _interval(d: np.ndarray, rng: np.random.Generator) -> tuple[float, float]:
         return math.nan, math.nan
     if np.all(d == d[0]):
         return float(d[0]), float(d[0])  # every resample has this mean
-    with warnings.catch_warnings():
-        # BCa warns, and answers NaN, when nearly every resample has one mean.
-        warnings.simplefilter("ignore")
-        ci = stats.bootstrap((d,), np.mean, n_resamples=RESAMPLES, confidence_level=CONFIDENCE,
-                             method="BCa", random_state=rng).confidence_interval
-    low, high = float(ci.low), float(ci.high)
-    if math.isnan(low) or math.isnan(high):
-        low, high = (float(x) for x in np.quantile(
-            d[rng.integers(0, d.size, (RESAMPLES, d.size))].mean(axis=1),
-            [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2]))
-    return low, high
+    # BCa warns, and answers NaN, when nearly every resample has one mean; the percentile
+    # interval then stands in.
+    for method in ("BCa", "percentile"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ci = stats.bootstrap((d,), np.mean, n_resamples=RESAMPLES,
+                                 confidence_level=CONFIDENCE, method=method,
+                                 random_state=rng).confidence_interval
+        if not (math.isnan(ci.low) or math.isnan(ci.high)):
+            break
+    return float(ci.low), float(ci.high)
 
 
 def paired_comparisons(values: Mapping[str, Mapping[Hashable, float]],

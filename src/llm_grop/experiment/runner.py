@@ -270,12 +270,22 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
             close()  # stops the work still under way
     outcomes = []
     for index, cell in enumerate(cells):
-        mine = sorted(read_rows(cell.out), key=_sort_key)
         if not interrupted:
-            _rewrite(cell.out, mine)
-        outcomes.append(Outcome(tuple(mine) if keep_rows else (), ran[index], skipped[index],
-                                interrupted))
+            _sort_file(cell.out)
+        mine = tuple(sorted(read_rows(cell.out), key=_sort_key)) if keep_rows else ()
+        outcomes.append(Outcome(mine, ran[index], skipped[index], interrupted))
     return tuple(outcomes)
+
+
+def _sort_file(out: Path) -> None:
+    """Rewrite the results file in ``(task, trial, method)`` order, its lines as they are
+    (each was checked when written, so it is only parsed for its key, not validated)."""
+    def key(line: str) -> tuple[int, int, str]:
+        row = json.loads(line)
+        return (row["task"], row["trial"], row["method"])
+
+    lines = (out / ROWS).read_text(encoding="utf-8").splitlines(keepends=True)
+    _write_lines(out, sorted((line for line in lines if line.strip()), key=key))
 
 
 def _append(path: Path, row: TrialRow) -> None:
@@ -288,10 +298,14 @@ def _append(path: Path, row: TrialRow) -> None:
 
 def _rewrite(out: Path, rows: list[TrialRow]) -> None:
     """Write ``rows`` as the results file, atomically."""
+    _write_lines(out, [_line(row) for row in rows])
+
+
+def _write_lines(out: Path, lines: list[str]) -> None:
+    """Write ``lines`` (each ending in a newline) as the results file, atomically."""
     tmp = out / f".{ROWS}.tmp"
     with tmp.open("w", encoding="utf-8") as f:
-        for row in rows:
-            f.write(_line(row))
+        f.writelines(lines)
         f.flush()
         os.fsync(f.fileno())
     tmp.replace(out / ROWS)

@@ -308,27 +308,23 @@ def _p(p: float) -> str:
     return "< 0.0001" if p < 1e-4 else f"{p:.4f}"
 
 
+def rich_table(title: str, headers: Sequence[str], rows: Iterable[Sequence[str]],
+               left: int = 1) -> RichTable:
+    """A rich table of text cells, its first ``left`` columns left-aligned, the others
+    (numbers) right-aligned; every cell is printed as it is, never read as markup."""
+    table = RichTable(title=title, title_justify="left")
+    for k, header in enumerate(headers):
+        table.add_column(escape(header), justify="left" if k < left else "right")
+    for row in rows:
+        table.add_row(*(escape(c) for c in row))
+    return table
+
+
 def print_summary(summary: Summary, console: Console, *, with_se: bool = False,
                   paired: Paired | None = None) -> None:
     """Print the tables of :func:`summary_markdown` to ``console`` as rich tables."""
-    table = RichTable(title="Results per method (mean ± standard error)", title_justify="left")
-    for k, header in enumerate(_METHOD_HEADERS):
-        table.add_column(header, justify="left" if k == 0 else "right")
-    for m in summary.methods:
-        table.add_row(*(escape(c) for c in _method_cells(m)))
-    console.print(table)
-    per_task = RichTable(title=_task_title(with_se), title_justify="left")
-    per_task.add_column("task", justify="right")
-    for name in summary.method_names:
-        per_task.add_column(escape(name), justify="right")
-    for task in summary.tasks:
-        per_task.add_row(*(escape(c) for c in _task_cells(summary, task, with_se)))
-    console.print(per_task)
+    (headers, rows), (task_headers, task_rows) = summary_tables(summary, with_se=with_se)
+    console.print(rich_table("Results per method (mean ± standard error)", headers, rows))
+    console.print(rich_table(_task_title(with_se), task_headers, task_rows, left=0))
     if paired:
-        headers, rows = paired_table(paired)
-        pairs = RichTable(title=PAIRED_TITLE, title_justify="left")
-        for k, header in enumerate(headers):
-            pairs.add_column(header, justify="left" if k < 3 else "right")
-        for row in rows:
-            pairs.add_row(*(escape(c) for c in row))
-        console.print(pairs)
+        console.print(rich_table(PAIRED_TITLE, *paired_table(paired), left=3))

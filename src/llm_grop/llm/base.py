@@ -110,20 +110,17 @@ class CallLog:
         t0 = time.perf_counter()
         if not getattr(self.llm, "accepts_schema", False):
             schema = None
-        cache, key = None, None
         # An unseeded call is asked to differ from the last, so it is never cached.
-        if self.cache is not None and params.seed is not None:
-            identity = backend_identity(self.llm)
-            if identity is not None:
-                cache = self.cache
-                key = CallKey(self.llm.backend, identity, prompt, asdict(params), grammar,
-                              schema)
+        identity = backend_identity(self.llm) \
+            if self.cache is not None and params.seed is not None else None
+        key = None if identity is None else CallKey(self.llm.backend, identity, prompt,
+                                                     asdict(params), grammar, schema)
         try:
-            record = cache.get(key) if cache is not None and key is not None else None
+            record = self.cache.get(key) if self.cache and key else None
             if record is None:
                 record = self._ask(prompt, params, grammar, schema)
-                if cache is not None and key is not None:
-                    cache.put(key, record)
+                if self.cache and key:
+                    self.cache.put(key, record)
             self.calls.append(record)
             log.debug("%s call, seed %s: %.2f s, %s completion tokens", record.backend,
                       record.seed, record.latency_s, record.completion_tokens)
