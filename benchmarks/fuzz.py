@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 from fuzz_inputs import ITEMS, Input  # noqa: E402
 from fuzz_targets import TARGETS, Target, check  # noqa: E402
 
-from llm_grop.arrangement.relations import parse_relations  # noqa: E402
+from llm_grop.language.answer_reader import parse_relations  # noqa: E402
 from llm_grop.world.catalog import Catalog  # noqa: E402
 
 #: Characters of an input shown in the table.

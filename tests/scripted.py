@@ -31,15 +31,16 @@ PAPER_CONSISTENT = (
 
 
 def scripted(answers: Sequence[str], distance: str = "About 3 centimeters.",
-             followup: str = "", items: str = "none") -> Callable[[dict[str, Any]], str]:
+             followup: str = "", reading: str = "diners: 1"
+             ) -> Callable[[dict[str, Any]], str]:
     """A reply function: Template 1 prompts get ``answers`` in turn (the last repeats);
-    the question which objects a request asks for gets ``items``."""
+    the question that reads a whole request gets ``reading``."""
     state = {"n": 0}
 
     def reply(body: dict[str, Any]) -> str:
         prompt = body["messages"][-1]["content"]
-        if "ask the robot to put on the table" in prompt:
-            return items
+        if "A person asked:" in prompt:
+            return reading
         if "how many centimeters" in prompt.lower():
             return distance
         if "where should" in prompt.lower():

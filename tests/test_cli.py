@@ -63,7 +63,7 @@ def test_record_then_replay_is_byte_identical(chat_server, tmp_path: Path, monke
 @pytest.mark.parametrize(("args", "code", "needle"), [
     (["arrange", ""], 2, "request: empty"),
     (["arrange", "   "], 2, "request: empty"),
-    (["arrange", "set the table with a plate and a spork"], 2, "unknown object 'spork'"),
+    (["arrange", "happiness and a spork"], 2, "unknown object 'happiness'"),
     (["arrange", REQUEST, "--table", "big"], 2, "--table"),
     (["arrange", REQUEST, "--llm", "gpt9"], 2, "unknown backend 'gpt9'"),
     (["arrange", REQUEST, "--llm", "replay"], 2, "--replay FILE"),
@@ -314,26 +314,68 @@ def test_a_request_in_brackets_is_printed_as_written(chat_server, capsys, monkey
 def test_objects_the_matcher_cannot_read_are_read_by_the_llm(chat_server, tmp_path: Path,
                                                              capsys, monkeypatch) -> None:
     monkeypatch.setenv("OPENAI_API_KEY", "test")
-    chat_server.reply = scripted([TASK1_GOOD], items="1 dinner fork\n1 dinner knife")
+    chat_server.reply = scripted([TASK1_GOOD], reading=(
+        'diners: 1\nobject: 1 dinner plate | "a dinner plate"\n'
+        'object: 1 dinner fork | "cutlery"\nobject: 1 dinner knife | "cutlery"'))
     out = tmp_path / "t.json"
     assert main(["arrange", "a dinner plate and cutlery", *_openai(chat_server),
                  "--json", str(out)]) == 0
     data = json.loads(out.read_text())
     assert data["request_read_by"] == "llm"
-    assert [o["kind"] for o in data["objects"]] == ["dinner plate", "dinner fork",
-                                                    "dinner knife"]
+    assert [(o["kind"], o["source"], o["words"]) for o in data["objects"]] == [
+        ("dinner plate", "request", "a dinner plate"), ("dinner fork", "llm", "cutlery"),
+        ("dinner knife", "llm", "cutlery")]
     err = capsys.readouterr().err
-    assert "warning: the LLM read 'cutlery' as: 1 dinner fork, 1 dinner knife" in err
+    assert ("warning: the openai LLM chose what the request does not name: 1 dinner fork "
+            "(for 'cutlery'), 1 dinner knife (for 'cutlery'); --no-guess refuses this") in err
+    assert main(["arrange", "a dinner plate and cutlery", *_openai(chat_server),
+                 "--no-guess"]) == 2
+    assert "--no-guess forbids it" in _one_line_error(capsys)
 
 
-@pytest.mark.parametrize("request_text", [
-    "set the table with happiness", "set the table with ² dinner plates and ①",
-    "стол с тарелкой", "x" * 5000])
-def test_requests_nothing_can_read_are_one_line_errors(request_text: str, capsys) -> None:
+@pytest.mark.parametrize(("request_text", "start"), [
+    ("happiness", "request: unknown object 'happiness'"),
+    ("стол с тарелкой", "request: unknown object"),
+    ("x" * 5000, "request: 5000 characters"),
+    ("a table for 13", "request: 'for 13': between 1 and 12 diners"),
+    ("13 forks", "request: '13 forks': at most 12 of one object"),
+    ("the fork -2 cm to the left of the plate", "request: '-2 cm': a distance must not be"),
+    ("the fork 3 metres to the left of the plate", "request: 'the fork 3 metres to the left "
+                                                   "of the plate': 300 cm does not fit"),
+    ("the mug 70 cm behind the plate", "request: 'the mug 70 cm behind the plate': 70 cm does "
+                                       "not fit on the 0.9 x 0.6 m table"),
+    ("the fork to the left of the plate and the plate to the left of the fork",
+     "request: the request's relations contradict each other: 'the fork to the left of the "
+     "plate' (the request); 'the plate to the left of the fork' (the request)"),
+    # The LLM is asked (here a recording of no call, so it cannot answer).
+    ("set the table with ² dinner plates and ①", "no_calls.jsonl: no recorded response for "
+                                                 "prompt 'A robot sets a dining table"),
+])
+def test_requests_nothing_can_read_are_one_line_errors(request_text: str, start: str,
+                                                       capsys) -> None:
     code = main(["arrange", request_text, "--llm", "replay", "--replay",
                  str(Path(__file__).parent / "arrangement" / "no_calls.jsonl")])
     assert code == 2
-    assert _one_line_error(capsys).startswith("llm-grop: error: request:")
+    assert _one_line_error(capsys).startswith(f"llm-grop: error: {start}")
+
+
+@pytest.mark.parametrize(("reading", "start"), [
+    ('{"diners": 1, "objects": [], "relations": []}',
+     "request: nothing in 'set the table with happiness' names tableware, and the openai "
+     "LLM read no object in it either"),
+    ('{"diners": 1, "objects": [{"name": "salt shaker", "count": 1, "words": "happiness"}], '
+     '"relations": []}', "request: the openai LLM's reading: unknown object 'salt shaker'"),
+    ('{"diners": 13, "objects": [{"name": "plate", "count": 1, "words": "table"}], '
+     '"relations": []}', "request: the openai LLM's reading: 13 diners; between 1 and 12"),
+])
+def test_what_the_llm_reads_is_checked_on_the_command_line(reading: str, start: str,
+                                                           chat_server, capsys,
+                                                           monkeypatch) -> None:
+    monkeypatch.setenv("OPENAI_API_KEY", "test")
+    chat_server.reply = scripted([TASK1_GOOD], reading=reading)
+    code = main(["arrange", "set the table with happiness", *_openai(chat_server)])
+    assert code == 2
+    assert _one_line_error(capsys).startswith(f"llm-grop: error: {start}")
 
 
 def test_a_request_that_is_not_utf8_is_one_line(tmp_path: Path) -> None:

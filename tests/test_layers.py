@@ -19,8 +19,12 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "llm_grop"
 FORBIDDEN: dict[str, set[str]] = {
     "world": {"*"},  # representation only: nothing but errors
     "geometry": {"*"},  # below planning and simulation: nothing but world and errors
-    "llm": {"world", "arrangement", "planning", "simulation", "methods", "evaluation",
-            "experiment", "render", "api", "cli", "ratings"},
+    "llm": {"world", "language", "arrangement", "planning", "simulation", "methods",
+            "evaluation", "experiment", "render", "api", "cli", "ratings"},
+    # Reading people's words sits below arrangement and evaluation, which both read
+    # through it; it never reaches up into them.
+    "language": {"arrangement", "evaluation", "planning", "simulation", "methods",
+                 "experiment", "render", "api", "cli", "ratings", "env", "geometry"},
     "arrangement": {"evaluation", "experiment", "planning", "simulation", "methods", "api",
                     "cli", "render", "ratings"},
     "planning": {"evaluation", "experiment", "simulation", "methods", "api", "cli", "render",

@@ -8,10 +8,11 @@ from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from llm_grop.arrangement import understanding
 from llm_grop.arrangement.diners import seat_items, seat_table
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
+from llm_grop.arrangement.stated import check_stated
 from llm_grop.errors import BadInput
+from llm_grop.language import understanding
 from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
 from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import create_llm
@@ -53,18 +54,21 @@ def resolve_items(request: str | None, task: int | None, catalog: Catalog,
 
 
 def understand(request: str | None = None, *, task: int | None = None,
-         catalog: Catalog | None = None, tasks: Mapping[int, Task] | None = None,
-         llm: str | LLM | CallLog | Callable[[], CallLog] | None = "embedded",
-         llm_options: BackendOptions | None = None, seed: int = 0,
-         params: SamplingParams | None = None,
-         on_event: Callable[[str], None] | None = None) -> Request:
+               catalog: Catalog | None = None, tasks: Mapping[int, Task] | None = None,
+               llm: str | LLM | CallLog | Callable[[], CallLog] | None = "embedded",
+               llm_options: BackendOptions | None = None, seed: int = 0,
+               params: SamplingParams | None = None,
+               on_event: Callable[[str], None] | None = None, guess: bool = True,
+               table: Table | None = None) -> Request:
     """What ``request`` (or the paper's Table I ``task``, an id of ``tasks``) asks for: its
     items, the relations it states, and how they were read.
 
-    The catalog matcher reads what it can; ``llm`` is asked about each chunk it cannot
-    account for (:mod:`llm_grop.arrangement.understanding`), and made only then;
-    ``llm=None`` refuses such a chunk as an unknown object. ``seed`` fixes those calls'
-    seeds.
+    The catalog matcher reads the request alone when it accounts for every word; otherwise
+    ``llm`` reads the whole request (:mod:`llm_grop.language.understanding`), and is made
+    only then; ``llm=None`` refuses such a request with the words the matcher could not
+    read. ``seed`` fixes that call's seed. ``guess=False`` refuses a reading with objects
+    the request does not name. The stated relations are checked with clingo, and their
+    distances against ``table`` when given.
     """
     catalog = catalog or Catalog.load()
     if task is not None:
@@ -79,7 +83,9 @@ def understand(request: str | None = None, *, task: int | None = None,
     else:
         backend = llm
         log = lambda: make_llm(backend, llm_options)  # noqa: E731
-    return understanding.understand(request, catalog, log, seed, params, on_event)
+    reading = understanding.understand(request, catalog, log, seed, params, on_event, guess)
+    check_stated(reading, table)
+    return reading
 
 
 def arrange(request: str | None = None, *, task: int | None = None,
@@ -87,19 +93,22 @@ def arrange(request: str | None = None, *, task: int | None = None,
             table: Table | None = None, seed: int = 0, catalog: Catalog | None = None,
             catalog_files: Sequence[str | PathLike[str]] = (),
             options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
-            on_event: Callable[[str], None] | None = None) -> ArrangementResult:
+            on_event: Callable[[str], None] | None = None, guess: bool = True
+            ) -> ArrangementResult:
     """Arrange the objects of ``request`` (or of the paper's Table I ``task``) on ``table``.
 
     ``llm`` is a backend name (``"embedded"``, ``"openai"``, ``"replay"``), an
     :class:`LLM`, or a :class:`CallLog`. ``seed`` fixes every LLM call's seed and
     the sampler, so the same inputs give the same result. ``record`` appends each
-    LLM call to a JSONL file that ``llm="replay"`` can read back.
+    LLM call to a JSONL file that ``llm="replay"`` can read back. ``guess=False`` refuses
+    a request whose reading needs the LLM to choose objects it does not name.
     """
     catalog = catalog or Catalog.load(catalog_files)
     options = options or ArrangeOptions()
     log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
     reading = understand(request, task=task, catalog=catalog, llm=log, seed=seed,
-                   params=options.params, on_event=on_event)
+                         params=options.params, on_event=on_event, guess=guess,
+                         table=table or Table())
     items = seat_items(reading.items, table or Table())
     top = seat_table(table or Table(), items)
     return arrange_items(reading, items, log, catalog, top, seed, options, on_event)
@@ -114,7 +123,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         simulator: str | Simulator = DEFAULT_SIMULATOR, planner: GropOptions | None = None,
         feasibility: str = "default",
         tasks: Mapping[int, Task] | None = None,
-        on_event: Callable[[str], None] | None = None) -> RunResult:
+        on_event: Callable[[str], None] | None = None, guess: bool = True) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
 
     ``scene`` is a :class:`Scene`, a scene YAML file, or ``None`` for the packaged dining
@@ -128,7 +137,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     :class:`~llm_grop.simulation.mujoco.simulator.MujocoSimulator` with options (the plan
     is the same whichever executes it); ``feasibility`` names the planner's belief of how
     often actions succeed (``default``, or ``mujoco`` as fitted in 3D); ``tasks``
-    replaces the paper's Table I for ``task``. The same seed gives the same run.
+    replaces the paper's Table I for ``task``; ``guess=False`` refuses a request whose
+    reading needs the LLM to choose objects. The same seed gives the same run.
     """
     # Planning pulls in OMPL and scipy; import them only when a run needs them.
     from llm_grop.methods.base import EpisodeInput
@@ -162,7 +172,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         return made[0]
 
     reading = understand(request, task=task, catalog=catalog, tasks=tasks, llm=log, seed=seed,
-                   params=options.params, on_event=on_event)
+                         params=options.params, on_event=on_event, guess=guess,
+                         table=base.target_top)
     items = seat_items(reading.items, base.target_top)  # a scene with seats: one setting each
     top = seat_table(base.target_top, items)  # too many diners: reported before any work
     check = getattr(sim, "check", None)

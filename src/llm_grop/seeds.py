@@ -14,8 +14,8 @@ stage                  what it seeds                                          pa
 ``llm.distance``       the Template 2 call of the k-th relation                k
 ``llm.edge``           the call asking the origin object's distance from the   0
                        diner's edge of the table
-``llm.items``          the call asking which catalog objects the k-th chunk    k
-                       of a request the catalog matcher cannot read asks for
+``llm.reading``        the call that reads a whole request the catalog         0
+                       matcher cannot read alone
 ``sampler``            the LLM-guided Gaussian rejection sampler (M configs;   diner
                        per diner when the table seats several)
 ``random_arrangement`` the baselines' random collision-free arrangement
@@ -46,7 +46,7 @@ STAGES: dict[str, int] = {
     "llm.followup": 2,
     "llm.distance": 3,
     "llm.edge": 4,
-    "llm.items": 5,
+    # 5 was "llm.items", the per-chunk question of llm-grop 0.5-0.7; never reused.
     "sampler": 10,
     "random_arrangement": 11,
     "chairs": 12,
@@ -57,6 +57,7 @@ STAGES: dict[str, int] = {
     "calibration": 17,
     "ratings.order": 18,
     "bootstrap": 19,
+    "llm.reading": 20,
 }
 
 

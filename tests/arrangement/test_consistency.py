@@ -293,3 +293,24 @@ def test_relations_read_off_grid_positions_are_consistent(points, rnd) -> None:
     rnd.shuffle(rels)
     assert check(rels) == ConsistencyReport(True, ())
     assert largest_consistent_subset(rels) == tuple(rels)
+
+
+# --- Every relation of the table, pairwise ------------------------------------------------
+
+
+@pytest.mark.parametrize("first", [r for r in RELATION_NAMES if r != "center"])
+def test_one_relation_per_pair_and_converses_agree(first: str) -> None:
+    """For one pair, a relation holds with itself and its converse said from the other side,
+    and with no other relation: the table gives no two relations one meaning."""
+    a_b = R("a", first, "b")
+    assert check([a_b, a_b.converse()]).consistent
+    for second in RELATION_NAMES:
+        if second == "center":
+            continue
+        assert check([a_b, R("a", second, "b")]).consistent == (second == first), second
+
+
+def test_asp_name_is_still_importable_from_here() -> None:
+    from llm_grop.arrangement.consistency import ASP_NAME
+    assert ASP_NAME["to the left of"] == "left"
+    assert set(ASP_NAME) == set(RELATION_NAMES)

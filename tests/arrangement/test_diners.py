@@ -16,8 +16,8 @@ from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.errors import BadInput
 from llm_grop.evaluation import rate
 from llm_grop.geometry.places import default_seats, places
+from llm_grop.language.request import parse_request
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.request import parse_request
 from llm_grop.world.seat import Seat
 from llm_grop.world.serialize import arrangement_to_dict
 from llm_grop.world.table import Table

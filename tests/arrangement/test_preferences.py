@@ -145,3 +145,17 @@ def test_unreadable_pool_sentence_is_bad_input(chat_server) -> None:
     # A readable sentence about objects not requested simply does not apply.
     result = _arrange(chat_server, ArrangeOptions(preference_pool=("the mug lid on the mug",)))
     assert result.arrangement.relations
+
+
+def test_an_ambiguous_preference_is_a_choice_the_llm_decides(chat_server) -> None:
+    from llm_grop.arrangement.preferences import read_preferences
+
+    read = read_preferences(["the dinner knife beside the dinner plate, 2 cm away"], (), ITEMS,
+                            CATALOG)
+    assert read.relations == () and len(read.choices) == 1
+    assert {r.gap_m for option in read.choices[0].options for r in option} == {0.02}
+    chat_server.reply = scripted([TASK1_GOOD])
+    result = _arrange(chat_server, ArrangeOptions(
+        preferences=("the dinner knife beside the dinner plate",)))
+    assert ("dinner knife", "to the right of", "dinner plate") in _rels(result)
+    assert any("as the LLM's relations have it" in w for w in result.arrangement.warnings)

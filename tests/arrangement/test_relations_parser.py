@@ -9,14 +9,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from llm_grop.arrangement.relations import (
-    ParsedAnswer,
     followup_grammar,
     followup_prompt,
     gbnf_literal,
-    parse_relations,
     template1_grammar,
     template1_prompt,
 )
+from llm_grop.language.answer_reader import ParsedAnswer, parse_relations
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog, ObjectSpec
 from llm_grop.world.relation import RELATION_NAMES, Relation
@@ -195,7 +194,7 @@ def test_grammar_literals_are_escaped() -> None:
      "plate.", [KNIFE_RIGHT]),
     ("The knife should never be placed to the left of the plate.", []),
     ("| Fork | to the left of | Plate |", [FORK_LEFT]),
-    ("Place the fork beside the plate.", []),
+    ("Place the fork near the plate.", []),
 ])
 def test_messy_answers(text: str, expected: list[tuple]) -> None:
     assert _keys(text) == expected
@@ -263,9 +262,9 @@ def test_left_out_objects_and_self_relations() -> None:
 
 
 def test_lines_naming_objects_without_a_relation_are_ignored() -> None:
-    parsed = _parse("Place the fork next to the plate.\nPlace the knife to the right.")
+    parsed = _parse("Place the fork near the plate.\nPlace the knife to the right.")
     assert parsed.relations == ()
-    assert parsed.ignored == ("Place the fork next to the plate.",
+    assert parsed.ignored == ("Place the fork near the plate.",
                               "Place the knife to the right.")
 
 
@@ -384,18 +383,18 @@ def test_decorated_template_lines_read_back_exactly(
 
 
 def test_long_ignored_lines_are_shortened() -> None:
-    line = "Place the fork next to the plate, " + "and so on " * 10_000
+    line = "Place the fork near the plate, " + "and so on " * 10_000
     parsed = _parse(line + "\nPlace the knife to the right of the plate.")
     (ignored,) = parsed.ignored
     assert len(ignored) <= 120 and ignored.endswith("…")
-    assert ignored.startswith("Place the fork next to the plate, and so on")
+    assert ignored.startswith("Place the fork near the plate, and so on")
     assert [r.key() for r in parsed.relations] == [KNIFE_RIGHT]
 
 
 def test_ignored_lines_are_capped_with_a_count() -> None:
-    lines = [f"{k}. Place the fork next to the plate ({k})." for k in range(1, 31)]
+    lines = [f"{k}. Place the fork near the plate ({k})." for k in range(1, 31)]
     parsed = _parse("\n".join(lines + lines))  # repeats are listed once, as before
-    assert parsed.ignored == (*(f"Place the fork next to the plate ({k})." for k in range(1, 21)),
+    assert parsed.ignored == (*(f"Place the fork near the plate ({k})." for k in range(1, 21)),
                               "… and 10 more lines")
 
 
@@ -410,3 +409,19 @@ def test_a_long_chain_of_objects_reads_as_before() -> None:
     diagonal = "The fork to the left of the plate, slightly above it. " * 500
     assert [r.key() for r in _parse(diagonal).relations] == [
         ("dinner fork", "above and to the left of", "dinner plate")] * 500
+
+
+def test_ambiguous_words_become_choices() -> None:
+    parsed = _parse("Place the knife beside the plate.\n"
+                    "The fork and the knife either side of the plate.")
+    assert parsed.relations == () and parsed.ignored == ()
+    beside, either = parsed.choices
+    assert [[r.key() for r in option] for option in beside.options] == [
+        [("dinner knife", "to the left of", "dinner plate")],
+        [("dinner knife", "to the right of", "dinner plate")]]
+    assert [[r.key() for r in option] for option in either.options] == [
+        [("dinner fork", "to the left of", "dinner plate"),
+         ("dinner knife", "to the right of", "dinner plate")],
+        [("dinner fork", "to the right of", "dinner plate"),
+         ("dinner knife", "to the left of", "dinner plate")]]
+    assert parsed.missing == ()

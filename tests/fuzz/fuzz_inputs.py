@@ -74,8 +74,17 @@ SPECIAL_CHARS = ["²", "³", "¹", "₂", "①", "⑩", "１", "０", "٣", "߁"
 _COUNTED = [f"{count} {name}" for count in ("a", "an", "one", "two", "3", "12", "31",
                                             "a pair of", "a couple of", "a dozen", "another")
             for name in _NAMES]
+#: Pieces of the LLM's reading of a request: its line format and its JSON.
+_READING = ["diners:", "object:", "relation:", "|", " | ", '"a plate"', "with", "cm", "2 cm",
+            "-3 cm", "center", "beside", "either side of", "table", "null", '{"diners": 2,',
+            '"objects": [', '{"name": "fork", "count": 2, "words": "two forks"}', "]", "}",
+            '"relations": [', '{"subject": "fork", "relation": "beside", "reference": "plate",'
+            ' "distance_cm": null, "partner": null, "words": ""}', '"count": 13', '"count": 1.5',
+            '"diners": true', '"distance_cm": -2', '"distance_cm": "2 inches"', "```json", "```"]
 _WORDS_BY_KIND = {
-    "request": [_COUNTED, _COUNTED, _COUNTED, _NAMES, NUMBERS[:30], _GLUE, _GLUE],
+    "request": [_COUNTED, _COUNTED, _COUNTED, _NAMES, NUMBERS[:30], _GLUE, _GLUE,
+                _PHRASES, UNITS],
+    "reading": [_READING, _READING, _NAMES, _PHRASES, NUMBERS, _GLUE],
     "answer": [_NAMES, _PHRASES, _GLUE, _GLUE],
     "distance": [NUMBERS, UNITS, _GLUE, _PHRASES],
     "preferences": [_NAMES, _PHRASES, NUMBERS, UNITS, _GLUE],
@@ -100,8 +109,20 @@ VALID = {
                 "a dinner plate, a dinner fork and a dinner knife for two",
                 "I'd like a mug on a coaster with its lid, please",
                 "three place settings with a plate and a pair of forks",
-                "a couple of strawberries & a fruit bowl plus bread"],
+                "a couple of strawberries & a fruit bowl plus bread",
+                "a plate with a fork on its left and a knife beside it, 2 cm away",
+                "the fork and the knife either side of the plate; a glass at the top right",
+                "breakfast for two, and a mug of coffee on a coaster if you can"],
     "answer": _valid_answers(),
+    "reading": ['diners: 2\nobject: 1 dinner plate | "a plate"\nobject: 2 fork\n'
+                'relation: dinner fork | to the left of | dinner plate | 2 cm | "two forks left"\n'
+                'relation: fork 2 | beside | plate\nrelation: plate | center',
+                '{"diners": 1, "objects": [{"name": "mug", "count": 1, "words": "coffee"}, '
+                '{"name": "mug mat", "count": 1, "words": "a coaster"}], "relations": '
+                '[{"subject": "mug", "relation": "on top of", "reference": "mug mat", '
+                '"distance_cm": null, "partner": null, "words": "a mug on a coaster"}]}',
+                "object: 1 dinner fork\nobject: 1 dinner knife\nobject: 1 dinner plate\n"
+                "relation: dinner fork | either side of | dinner plate | with dinner knife"],
     "distance": ["About 5-7 centimeters.", "2 inches", "Between 5 and 7 cm.", "1,000 mm",
                  "twenty-two centimeters to the left", "1. About 7", "2½ cm", "1e3 mm"],
     "preferences": ["the dinner fork to the left of the dinner plate",

@@ -25,12 +25,14 @@ from llm_grop.arrangement.preferences import (
     read_preferences,
     stated_gaps,
 )
-from llm_grop.arrangement.relations import parse_relations
-from llm_grop.arrangement.understanding import read_items_answer
 from llm_grop.errors import LLMGropError
+from llm_grop.language.answer_reader import parse_relations
+from llm_grop.language.llm_reading import read_reading_answer
+from llm_grop.language.reading import item_names
+from llm_grop.language.request import parse_request, read_request
 from llm_grop.llm.record import LLMCallRecord, append_record, load_records
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.request import parse_request
+from llm_grop.world.request import MAX_COUNT
 from llm_grop.world.scene_file import load_scene, parse_scene
 from llm_grop.world.table import Table
 
@@ -46,10 +48,16 @@ def _text(data: Input) -> str:
 
 
 def _request(data: Input) -> None:
+    fast = read_request(_text(data), CATALOG)
+    assert (fast.reading is None) == bool(fast.unread or fast.doubts), fast
+    if fast.reading is None:
+        return
     request = parse_request(_text(data), CATALOG)
     names = {it.name for it in request.items}
     assert all(r.subject in names and r.reference in names | {None}
                for r in request.relations), request.relations
+    assert all(r.subject in names and r.reference in names
+               for c in request.choices for o in c.options for r in o), request.choices
 
 
 def _answer(data: Input) -> None:
@@ -58,10 +66,16 @@ def _answer(data: Input) -> None:
     assert all(len(line) <= MAX_IGNORED_CHARS for line in parsed.ignored), parsed.ignored
 
 
-def _items_answer(data: Input) -> None:
-    mentions, unknown = read_items_answer(_text(data), CATALOG)
-    assert all(m.spec.name in CATALOG and 1 <= m.count <= 30 for m in mentions), mentions
-    assert all(len(name.split()) <= 4 for name in unknown), unknown
+def _reading_answer(data: Input) -> None:
+    reading, notes = read_reading_answer(_text(data), "a request", CATALOG)
+    assert all("\n" not in note for note in notes), notes
+    assert reading.objects and 1 <= reading.diners <= 12, reading
+    assert all(o.name in CATALOG.specs and 1 <= o.count <= MAX_COUNT
+               for o in reading.objects), reading.objects
+    names = set(item_names(reading.objects, CATALOG))
+    assert all(r.subject in names and r.reference in names | {None}
+               and (r.distance_cm is None or r.distance_cm >= 0)
+               for r in reading.relations), reading.relations
 
 
 def _distance(data: Input) -> None:
@@ -79,7 +93,9 @@ def _sentences(data: Input) -> tuple[list[str], list[str]]:
 
 def _preferences(data: Input) -> None:
     required, pool = _sentences(data)
-    stated_gaps(read_preferences(required, pool, ITEMS, CATALOG), TABLE)
+    prefs = read_preferences(required, pool, ITEMS, CATALOG)
+    stated_gaps([*prefs.relations, *(r for c in prefs.choices for o in c.options for r in o)],
+                TABLE)
 
 
 def _edge_preferences(data: Input) -> None:
@@ -156,7 +172,7 @@ def _text_target(name: str, run: Callable[[Input], None], kind: str) -> Target:
 TARGETS: dict[str, Target] = {t.name: t for t in (
     _text_target("request", _request, "request"),
     _text_target("answer", _answer, "answer"),
-    _text_target("items_answer", _items_answer, "answer"),
+    _text_target("reading_answer", _reading_answer, "reading"),
     _text_target("distance", _distance, "distance"),
     _text_target("preferences", _preferences, "preferences"),
     _text_target("edge_preferences", _edge_preferences, "edge"),

@@ -1,5 +1,5 @@
-"""Fuzzing the text parsers: a request, an LLM answer (relations, or the objects a request
-asks for), a distance, preferences.
+"""Fuzzing the text parsers: a request, an LLM answer (relations, or its reading of a whole
+request), a distance, preferences.
 
 Each either returns or raises one of the project's errors with a one-line message
 (see ``fuzz_inputs``); ``benchmarks/fuzz.py`` runs the same targets for longer.
@@ -25,9 +25,9 @@ def test_answer_reader(text: str) -> None:
 
 
 @FUZZ
-@given(texts("answer"))
-def test_items_answer_reader(text: str) -> None:
-    holds(TARGETS["items_answer"], text)
+@given(texts("reading"))
+def test_reading_answer_reader(text: str) -> None:
+    holds(TARGETS["reading_answer"], text)
 
 
 @FUZZ

@@ -7,8 +7,9 @@ from pathlib import Path
 import pytest
 
 from llm_grop.errors import BadInput
+from llm_grop.language.request import parse_request
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.request import items_from_names, parse_request
+from llm_grop.world.request import items_from_names
 from llm_grop.world.tasks import Task, default_request, get_task, load_tasks
 
 TABLE_I = {

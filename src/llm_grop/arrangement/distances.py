@@ -5,36 +5,16 @@ is read as the **gap between the objects' edges** (see ``geometry``), as in the
 authors' code. In the same style (:func:`edge_prompt`) it is asked how far the
 setting's origin object goes from the table's edge nearest the diner; the answer
 is read as the gap between that edge and the object's near edge, and when no
-number can be read :data:`DEFAULT_EDGE_GAP_CM` is used. How
-:func:`parse_distance_cm` reads an answer:
-
-* A number with a unit wins over numbers without one (list numbering, "Step 2").
-  The first such distance in the text is taken.
-* A range ("5-7 centimeters", "5 to 7 cm", "between 5 and 7 cm", "5 or 6 cm")
-  gives its midpoint.
-* Units: centimetres, millimetres, metres, inches ("in." or a final "in", never
-  the word "in" inside a sentence), feet. Number words ("five", "twenty-two",
-  "one and a half", "half an inch") are understood.
-* Without any unit, the first number is read as centimetres.
-* A negative distance, one above :data:`MAX_GAP_CM`, or none at all gives ``None``;
-  :func:`parse_distance_m` then falls back to :data:`DEFAULT_GAP_CM`.
-* Numbers: "1,000" (comma thousands groups), "1e3" (exponents), "2½"/"¼"/"¾".
-  The text is NFKC-normalised first, so fullwidth ("１０ ｃｍ") and mathematical
-  digits read as ASCII ones and thin or no-break spaces as spaces; only ASCII
-  digits are then read (Arabic-Indic and other scripts' digits are not). The
-  Unicode minus "−", "‐", "‑", "‒" and the en and em dashes are hyphens, so "−5 cm"
-  is negative and "5–7 cm" a range. Superscripts, subscripts, circled digits and
-  other fractions ("²", "₂", "①", "⅓"), which NFKC would turn into digits, are
-  read as spaces: "5 cm²" is 5 cm, and "① Place it" holds no number.
+number can be read :data:`DEFAULT_EDGE_GAP_CM` is used. The answers are read by
+:func:`llm_grop.language.distance.parse_distance_cm`.
 """
 
 from __future__ import annotations
 
 import functools
-import re
-import unicodedata
 from importlib import resources
 
+from llm_grop.language.distance import MAX_GAP_CM, parse_distance_cm
 from llm_grop.world.relation import CENTER, STACKING, Relation
 
 #: The gap used when an answer holds no readable distance, in centimetres
@@ -44,35 +24,6 @@ DEFAULT_GAP_CM = 5.0
 #: near edge when the LLM's answer holds no readable distance (the same default as
 #: :data:`DEFAULT_GAP_CM`: no etiquette is assumed for it).
 DEFAULT_EDGE_GAP_CM = DEFAULT_GAP_CM
-#: Answers above this many centimetres are taken as unreadable.
-MAX_GAP_CM = 200.0
-
-#: Centimetres per unit, by the unit's first letters (see ``_unit_cm``).
-_UNIT_CM = {"cm": 1.0, "centi": 1.0, "mm": 0.1, "milli": 0.1, "m": 100.0, "met": 100.0,
-            "in": 2.54, "″": 2.54, "ft": 30.48, "foot": 30.48, "feet": 30.48}
-_ONES = {
-    "zero": 0, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7,
-    "eight": 8, "nine": 9, "ten": 10, "eleven": 11, "twelve": 12, "thirteen": 13,
-    "fourteen": 14, "fifteen": 15, "sixteen": 16, "seventeen": 17, "eighteen": 18,
-    "nineteen": 19,
-}
-_DIGITS = {"one": 1, **_ONES}
-_TENS = {"twenty": 20, "thirty": 30, "forty": 40, "fifty": 50, "sixty": 60, "seventy": 70,
-         "eighty": 80, "ninety": 90}
-
-# ASCII digits only ([0-9], not \d): other scripts' digits are not read (module docstring).
-_NUM = r"(?:(?:[0-9]{1,3}(?:,[0-9]{3})+|[0-9]+)(?:\.[0-9]+)?|\.[0-9]+)(?:e[+-]?[0-9]+)?"
-_UNIT = (r"centimet(?:er|re)s?|cms?|millimet(?:er|re)s?|mm|met(?:er|re)s?|m|"
-         r"inch(?:es)?|in\.|in(?=\s*(?:$|[,;:)!?]))|″|ft|foot|feet")
-_QUANTITY = re.compile(
-    rf"(?<![\w.])({_NUM})(?:\s*({_UNIT})(?![a-z]))?(?:\s*(?:-|to|and|or)\s*({_NUM}))?\s*({_UNIT})"
-    r"(?![a-z])")
-_BARE = re.compile(rf"(?<![\w.])({_NUM})(?:\s*(?:-|to|or)\s*({_NUM}))?(?![\w])")
-_LIST_NUMBER = re.compile(r"^\s*(?:step\s*)?[0-9]+\s*[.):]\s+", re.MULTILINE)
-#: Characters read as a hyphen (so as a minus sign or a range's dash).
-_DASHES = str.maketrans(dict.fromkeys("\u2010\u2011\u2012\u2013\u2014\u2212", "-"))
-#: Fractions read as decimals (before NFKC, which would make "½" the digits "1⁄2").
-_FRACTIONS = {"½": ".5", "¼": ".25", "¾": ".75"}
 
 
 @functools.lru_cache(maxsize=4)
@@ -111,75 +62,12 @@ def template2_grammar() -> str:
     return _asset("template2.gbnf")
 
 
-def _unit_cm(unit: str) -> float:
-    unit = unit.rstrip(".")
-    for prefix in ("centi", "milli", "met", "cm", "mm", "in", "ft", "foot", "feet", "″", "m"):
-        if unit.startswith(prefix):
-            return _UNIT_CM[prefix]
-    raise ValueError(f"unknown unit {unit!r}")
-
-
-def _words_to_digits(text: str) -> str:
-    """Number words as digits: "twenty-two cm" -> "22 cm", "half an inch" -> "0.5 inch"."""
-    unit = rf"(?=\s*(?:{_UNIT})(?![a-z]))"
-    tens, ones = "|".join(_TENS), "|".join(_DIGITS)
-    text = re.sub(rf"\b({tens})(?:[\s-]+({ones}))?\b",
-                  lambda m: str(_TENS[m.group(1)] + (_DIGITS[m.group(2)] if m.group(2) else 0)),
-                  text)
-    text = re.sub(rf"\b({'|'.join(_ONES)})\b", lambda m: str(_ONES[m.group(1)]), text)
-    text = re.sub(r"\b(\d+|one|an?)\s+and\s+(?:a|one)\s+half\b",
-                  lambda m: f"{_DIGITS.get(m.group(1), 1) + 0.5:g}" if not m.group(1)[0].isdigit()
-                  else f"{int(m.group(1)) + 0.5:g}", text)
-    text = re.sub(rf"\bhalf\s+(?:a|an)\b{unit}", "0.5", text)
-    text = re.sub(rf"\b(?:a|an)\s+half\b{unit}", "0.5", text)
-    return re.sub(rf"\b(?:a|an|one)\b{unit}", "1", text)
-
-
-def _in_range(cm: float) -> float | None:
-    return cm if 0.0 <= cm <= MAX_GAP_CM else None
-
-
-def _number(text: str) -> float:
-    """A matched ``_NUM`` as a float ("1,000" -> 1000.0; "1e999" -> inf)."""
-    return float(text.replace(",", ""))
-
-
-def _normalized(text: str) -> str:
-    """``text`` lower case and NFKC-normalised, with the module docstring's dashes,
-    fractions and non-decimal digits replaced."""
-    for fraction, decimal in _FRACTIONS.items():
-        text = text.replace(fraction, decimal)
-    if not text.isascii():
-        # NFKC turns "²", "①" and "⅓" into digits; they are no numbers of a distance.
-        text = "".join(" " if ch.isnumeric() and not ch.isdecimal() else ch for ch in text)
-        # NFKC makes the double prime (inches) two primes.
-        text = unicodedata.normalize("NFKC", text).replace("′′", "″")
-    return text.lower().translate(_DASHES)
-
-
-def parse_distance_cm(text: str) -> float | None:
-    """The distance an answer gives, in centimetres, or ``None`` when none can be read."""
-    text = _words_to_digits(re.sub(r"[*_`]", "", _normalized(text)))
-    m = _QUANTITY.search(text)
-    if m:
-        if re.search(r"(?:-|minus\s*)$", text[:m.start()]):
-            return None
-        low = _number(m.group(1))
-        high = _number(m.group(3)) if m.group(3) else low
-        cm = (low + high) / 2 * _unit_cm(m.group(4))
-        return _in_range(cm)
-    m = _BARE.search(_LIST_NUMBER.sub("", text))
-    if m is None:
-        return None
-    if re.search(r"(?:-|minus\s*)$", _LIST_NUMBER.sub("", text)[:m.start()]):
-        return None
-    low = _number(m.group(1))
-    high = _number(m.group(2)) if m.group(2) else low
-    return _in_range((low + high) / 2)
-
-
 def parse_distance_m(text: str, default_cm: float = DEFAULT_GAP_CM) -> tuple[float, bool]:
     """``(gap in metres, whether the default was used)`` for an answer to Template 2
     (or to :func:`edge_prompt`, with ``default_cm`` :data:`DEFAULT_EDGE_GAP_CM`)."""
     cm = parse_distance_cm(text)
     return ((default_cm if cm is None else cm) / 100.0, cm is None)
+
+
+__all__ = ["DEFAULT_EDGE_GAP_CM", "DEFAULT_GAP_CM", "MAX_GAP_CM", "edge_prompt",
+           "parse_distance_cm", "parse_distance_m", "template2_grammar", "template2_prompt"]

@@ -28,13 +28,14 @@ from llm_grop.arrangement import (
 )
 from llm_grop.arrangement.layout import GuidedLayout
 from llm_grop.arrangement.setting import Attempt, Sampled, Setting
-from llm_grop.errors import Infeasible, LLMError, ReplayMissing
+from llm_grop.errors import BadInput, Infeasible, LLMError, ReplayMissing
+from llm_grop.language.answer_reader import parse_relations
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.fidelity import Fidelity
 from llm_grop.world.llmlog import CallRecord, LLMSummary
-from llm_grop.world.relation import CENTER, STACKING, Relation
+from llm_grop.world.relation import CENTER, STACKING, Choice, Relation
 from llm_grop.world.request import Request
 from llm_grop.world.table import Table
 
@@ -55,7 +56,8 @@ class ArrangeOptions:
     diner's distance within this many metres (``None``: no such check; see
     :mod:`llm_grop.arrangement.fidelity`). ``stated``: relations the request states
     between its objects (``source="request"``, first diner's names); they take the
-    preferences' precedence.
+    preferences' precedence. ``choices``: the ambiguous ones ("the knife beside the plate"),
+    decided by the LLM's relations or clingo (:func:`~llm_grop.arrangement.consistency.choose`).
     """
 
     m: int = 25
@@ -68,6 +70,7 @@ class ArrangeOptions:
     preference_pool: tuple[str, ...] = ()
     gap_tolerance_m: float | None = fidelity.GAP_TOLERANCE_M
     stated: tuple[Relation, ...] = ()
+    choices: tuple[Choice, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -123,9 +126,10 @@ def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: 
     params = replace(options.params, seed=s, temperature=max(temperature,
                                                                options.params.temperature))
     record = llm.complete(prompt, params, relations.template1_grammar(items))
-    parsed = relations.parse_relations(record.response, items, catalog)
+    parsed = parse_relations(record.response, items, catalog)
     found = list(parsed.relations)
-    ignored = list(parsed.ignored)
+    # Template 1 asks for one relation per pair; an ambiguous line ("beside") is none.
+    ignored = list(parsed.ignored) + [c.words for c in parsed.choices]
     if len(items) > 1:
         for k, missing in enumerate(parsed.missing):
             anchor = _anchor_for(missing, items, found)
@@ -133,9 +137,9 @@ def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: 
                 relations.followup_prompt(missing, anchor),
                 options.params.with_seed(seeds.int_seed(seed, "llm.followup", attempt, k)),
                 relations.followup_grammar(missing, anchor))
-            answer = relations.parse_relations(record.response, items, catalog)
+            answer = parse_relations(record.response, items, catalog)
             found += [r for r in answer.relations if missing in (r.subject, r.reference)]
-            ignored += list(answer.ignored)
+            ignored += list(answer.ignored) + [c.words for c in answer.choices]
     found = _dedupe(found)
     report = consistency.check(found)
     return Attempt(s, tuple(found), report.conflict, tuple(ignored))
@@ -162,10 +166,19 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
     accepted: tuple[Relation, ...] = ()
     dropped: list[Relation] = []
     names = {it.name for it in items}
-    stated = [r for r in options.stated if r.subject in names
-              and (r.reference is None or r.reference in names)]
-    prefs = preferences.combine(stated, preferences.read_preferences(
-        options.preferences, options.preference_pool, items, catalog))
+
+    def ours(rels: Sequence[Relation]) -> bool:
+        return all(r.subject in names and (r.reference is None or r.reference in names)
+                   for r in rels)
+
+    stated = [r for r in options.stated if ours([r])]
+    read = preferences.read_preferences(options.preferences, options.preference_pool, items,
+                                        catalog)
+    prefs = preferences.combine(stated, read.relations)
+    choices = [c for c in (*options.choices, *read.choices)
+               if all(ours(option) for option in c.options)]
+    if choices and consistency.choose(prefs, choices).conflict:
+        raise BadInput(preferences.contradiction(consistency.choose(prefs, choices).conflict))
     if preferences.covers(prefs, items):
         say("the stated relations relate every object: Template 1 is not asked")
     elif len(items) > 1:
@@ -192,6 +205,11 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
                          for r in dropped]
         for attempt in attempts:
             warnings += [f"ignored LLM line: {line}" for line in attempt.ignored if line]
+    if choices:
+        decided = consistency.choose(prefs, choices, hints=accepted)
+        prefs = (*prefs, *decided.relations)
+        warnings += [_decided(c, c.options[k], why) for c, k, why
+                     in zip(choices, decided.picked, decided.why, strict=True)]
     if prefs:
         accepted, overridden = preferences.merge(prefs, accepted)
         warnings += [f"overridden by a stated relation: {_preview(r.line or r.sentence())}"
@@ -202,12 +220,12 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
                  if len(items) > 1 and it.name not in related]
 
     gaps: dict[tuple[str, str, str | None], float] = {}
-    stated = preferences.stated_gaps(prefs, table)
+    stated_gap = preferences.stated_gaps(prefs, table)
     for k, rel in enumerate(accepted):
         if rel.relation == CENTER or rel.relation in STACKING:
             continue
-        if rel.key() in stated:
-            gaps[rel.key()] = stated[rel.key()]
+        if rel.key() in stated_gap:
+            gaps[rel.key()] = stated_gap[rel.key()]
             continue
         say(f"asking {llm.model} for the distance: {rel.sentence()}")
         record = llm.complete(distances.template2_prompt(rel),
@@ -257,6 +275,17 @@ def _edge_distance(items: Sequence[Item], accepted: Sequence[Relation], llm: Cal
                         f"{distances.DEFAULT_EDGE_GAP_CM:g} cm from the diner's edge "
                         f"for the {origin}")
     return origin, edge_gap
+
+
+_WHY = {"hint": "as the LLM's relations have it",
+        "forced": "the only way the other relations allow",
+        "first": "the first way that fits the other relations; nothing said which"}
+
+
+def _decided(choice: Choice, option: Sequence[Relation], why: str) -> str:
+    """The warning that says how an ambiguous stated relation was decided, and why."""
+    said = "; ".join(f"the {r.subject} {r.relation} the {r.reference}" for r in option)
+    return f"{choice.words or 'an ambiguous relation'!r} read as {said} ({_WHY[why]})"
 
 
 def _preview(answer: str, limit: int = 120) -> str:
@@ -318,7 +347,8 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
     read_by = None
     if isinstance(request, Request):
         read_by = request.source
-        options = replace(options, stated=options.stated + request.relations)
+        options = replace(options, stated=options.stated + request.relations,
+                          choices=options.choices + request.choices)
         reading_calls, reading_warnings = request.calls, request.warnings
         request = request.text
 
@@ -357,6 +387,7 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
         relations=relations_all,
         llm=LLMSummary(llm.backend, llm.model, reading_calls + tuple(llm.calls[first_call:])),
         warnings=reading_warnings + warnings,
-        conflicts=tuple(a.conflict for a in attempts if a.conflict), read_by=read_by)
+        conflicts=tuple(a.conflict for a in attempts if a.conflict), read_by=read_by,
+        origins=tuple((it.name, it.source, it.words) for it in items))
     return ArrangementResult(arrangement, tuple(configs), layout, attempts, dropped, gaps,
                              edge_gap, tuple(measured))

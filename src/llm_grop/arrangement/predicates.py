@@ -6,18 +6,22 @@ Positions are object centres in the table frame (origin at the table-top centre,
 +x to the diner's right, +y away from the diner), in metres.
 
 Relations, for a subject X and a reference Y with half extents ``hx``, ``hy`` (half
-the footprint's axis-aligned bounding box; a circle's radius). On each axis the
-pair is in exactly one of three states, the same ones the ASP encoding uses:
+the footprint's axis-aligned bounding box; a circle's radius). What each relation means
+is the relations table (``world/relations.yaml``, read as
+:data:`~llm_grop.world.relation.MEANINGS`): the subject's state against the reference on
+each axis, one of three, the same ones the ASP encoding uses. Here each state gets its
+tolerance:
 
 * aligned: ``|x_X - x_Y| <= max(hx_X, hx_Y)`` (one centre lies within the other's span);
 * less:    ``x_X < x_Y - max(hx_X, hx_Y)``;
 * greater: ``x_X > x_Y + max(hx_X, hx_Y)``;
 
-and the same on y with ``hy``. Then ``to the left of`` is (x less, y aligned),
-``to the right of`` (x greater, y aligned), ``above`` (x aligned, y greater),
-``below`` (x aligned, y less), and each diagonal is strict on both axes
-(``above and to the left of`` is x less, y greater). ``on top of`` (X, Y): X's centre
-lies within Y's footprint; ``under`` (X, Y) is ``on top of`` (Y, X).
+and the same on y with ``hy``. So ``to the left of`` (x less, y aligned) holds when X's
+centre is left of Y's by more than the larger half width of the two, and the centres are
+no further apart in y than the larger half depth.
+A stacking relation, where the table says one object rests on the other, holds when the
+upper's centre lies within the lower's footprint (which implies aligned on both axes, as
+the table demands): ``on top of`` (X, Y) is X on Y, ``under`` (X, Y) is Y on X.
 ``center`` (X): X's centre lies in the middle half of the table on both axes,
 ``|x| <= CENTER_FRACTION * width`` and ``|y| <= CENTER_FRACTION * depth``.
 
@@ -45,7 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from llm_grop.world.arrangement import Placement
 from llm_grop.world.catalog import ObjectSpec
-from llm_grop.world.relation import CENTER, DIRECTION, ON_TOP_OF, STACKING, UNDER
+from llm_grop.world.relation import CENTER, MEANINGS, AxisState
 from llm_grop.world.table import Table
 
 #: ``center`` holds within this fraction of the table's width (depth) either side of
@@ -89,12 +93,14 @@ class Footprint:
         return math.pi * self.hx * self.hx if self.shape == "circle" else 4 * self.hx * self.hy
 
 
-def _axis_ok(sign: int, a: ArrayLike, b: ArrayLike, half: float, margin: float) -> Bools:
-    """Whether ``a`` is less (-1), aligned with (0) or greater (+1) than ``b`` on one axis."""
+def _axis_ok(state: AxisState, a: ArrayLike, b: ArrayLike, half: float,
+             margin: float) -> Bools:
+    """Whether ``a`` is in ``state`` (less, aligned or greater) against ``b`` on one axis,
+    ``half`` metres being the larger half extent of the two."""
     d = np.subtract(a, b)
-    if sign == 0:
+    if state == "aligned":
         return np.abs(d) <= half - margin
-    if sign < 0:
+    if state == "less":
         return d < -(half + margin)
     return d > half + margin
 
@@ -116,15 +122,17 @@ def pair_relation_holds(relation: str, xs: ArrayLike, ys: ArrayLike, fs: Footpri
 
     ``relation`` is any relation name but ``center``; arrays broadcast.
     """
-    if relation == ON_TOP_OF:
-        return centre_within(xs, ys, xr, yr, fr, margin)
-    if relation == UNDER:
-        return centre_within(xr, yr, xs, ys, fs, margin)
-    if relation not in DIRECTION:
+    meaning = MEANINGS.get(relation)
+    if meaning is None or not meaning.reference:
         raise ValueError(f"{relation!r} is not a relation between two objects")
-    sx, sy = DIRECTION[relation]
-    return (_axis_ok(sx, xs, xr, max(fs.hx, fr.hx), margin)
-            & _axis_ok(sy, ys, yr, max(fs.hy, fr.hy), margin))
+    # Resting is the stronger test: the table makes a resting pair aligned on both axes,
+    # and a centre within the lower footprint is within the pair's larger half extents.
+    if meaning.rests == "subject":
+        return centre_within(xs, ys, xr, yr, fr, margin)
+    if meaning.rests == "reference":
+        return centre_within(xr, yr, xs, ys, fs, margin)
+    return (_axis_ok(meaning.state("x"), xs, xr, max(fs.hx, fr.hx), margin)
+            & _axis_ok(meaning.state("y"), ys, yr, max(fs.hy, fr.hy), margin))
 
 
 def in_center(x: ArrayLike, y: ArrayLike, table: Table, margin: float = 0.0) -> Bools:
@@ -189,9 +197,11 @@ def rests_on_edges(relations: Iterable[tuple[str, str, str | None]]) -> list[tup
     """``(upper, lower)`` pairs stated by stacking relation keys ``(subject, relation, ref)``."""
     edges = []
     for subject, relation, reference in relations:
-        if relation not in STACKING or reference is None:
+        meaning = MEANINGS.get(relation)
+        if meaning is None or meaning.rests is None or reference is None:
             continue
-        edges.append((subject, reference) if relation == ON_TOP_OF else (reference, subject))
+        edges.append((subject, reference) if meaning.rests == "subject"
+                     else (reference, subject))
     return edges
 
 

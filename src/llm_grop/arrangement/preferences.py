@@ -18,20 +18,20 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Annotated
 
 from pydantic import BaseModel, StringConstraints
 
 from llm_grop.arrangement import consistency
-from llm_grop.arrangement.distances import parse_distance_cm, parse_distance_m
-from llm_grop.arrangement.relations import parse_relations
+from llm_grop.arrangement.distances import parse_distance_cm
 from llm_grop.errors import BadInput
+from llm_grop.language.answer_reader import parse_relations
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.datafile import load_yaml_model
-from llm_grop.world.relation import Relation
+from llm_grop.world.relation import DIRECTION, Choice, Relation
 from llm_grop.world.request import items_from_names
 from llm_grop.world.table import Table
 
@@ -103,34 +103,61 @@ def read_edge_preferences(required: Sequence[str], pool: Sequence[str],
     return out
 
 
+@dataclass(frozen=True)
+class Preferences:
+    """The relations stated preferences give (``source="preference"``, ``gap_m`` any
+    distance they state), and their ambiguous ones ("the knife beside the plate")."""
+
+    relations: tuple[Relation, ...] = ()
+    choices: tuple[Choice, ...] = ()
+
+
+def _with_gap(relation: Relation, sentence: str, where: str) -> Relation:
+    """``relation`` as a preference, with the distance ``sentence`` states, if any."""
+    if re.search(r"(?<![\w.])[-−]\s*\d", sentence):
+        raise BadInput(f"{where} {sentence!r}: a distance must not be negative")
+    cm = parse_distance_cm(sentence)
+    return replace(relation, source="preference", gap_m=None if cm is None else cm / 100)
+
+
 def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequence[Item],
-                     catalog: Catalog) -> tuple[Relation, ...]:
+                     catalog: Catalog) -> Preferences:
     """The relations of the ``required`` sentences (each must name requested objects, else
     :class:`BadInput`) and of those ``pool`` sentences whose objects are all requested.
 
-    Raises :class:`BadInput` when the preferences contradict each other.
+    Raises :class:`BadInput` when the preferences contradict each other, or state a
+    negative distance.
     """
     required = [s for s in required if not is_edge_sentence(s)]
     pool = [s for s in pool if not is_edge_sentence(s)]
     out: list[Relation] = []
+    choices: list[Choice] = []
     for sentence in required:
         parsed = parse_relations(sentence, items, catalog)
-        if not parsed.relations or parsed.ignored:
+        if not (parsed.relations or parsed.choices) or parsed.ignored:
             raise BadInput(f"--prefer: cannot read {sentence!r} as a relation between "
                            f"requested objects ({', '.join(i.name for i in items)})")
-        out += parsed.relations
+        out += [_with_gap(r, sentence, "--prefer") for r in parsed.relations]
+        choices += [_choice(c, sentence, "--prefer") for c in parsed.choices]
     everything: tuple[Item, ...] | None = None
     for sentence in pool:
         parsed = parse_relations(sentence, items, catalog)
-        if parsed.relations and not parsed.ignored:
-            out += parsed.relations
+        if (parsed.relations or parsed.choices) and not parsed.ignored:
+            out += [_with_gap(r, sentence, "preference") for r in parsed.relations]
+            choices += [_choice(c, sentence, "preference") for c in parsed.choices]
             continue
         # Not about the requested objects; it must still read as a relation at all.
         everything = everything or items_from_names(catalog.names(), catalog)
-        if not parse_relations(sentence, everything, catalog).relations:
+        read = parse_relations(sentence, everything, catalog)
+        if not (read.relations or read.choices):
             raise BadInput(f"preferences: cannot read {sentence!r} as a relation between "
                            "catalog objects")
-    return combine((), [replace(r, source="preference") for r in out])
+    return Preferences(combine((), out), tuple(choices))
+
+
+def _choice(choice: Choice, sentence: str, where: str) -> Choice:
+    return Choice(tuple(tuple(_with_gap(r, sentence, where) for r in option)
+                        for option in choice.options), choice.words)
 
 
 def combine(stated: Sequence[Relation], preferences: Sequence[Relation]
@@ -146,16 +173,27 @@ def combine(stated: Sequence[Relation], preferences: Sequence[Relation]
             unique.append(r)
     conflict = consistency.check(unique).conflict
     if conflict:
-        sources = {r.source for r in conflict}
-        whose = "preferences" if sources == {"preference"} else \
-            "the request's relations" if sources == {"request"} else \
-            "the request's relations and the preferences"
-        lines = "; ".join(f"{r.line or r.sentence()} ({_FROM[r.source]})" for r in conflict)
-        raise BadInput(f"{whose} contradict each other: {lines}")
+        raise BadInput(contradiction(conflict))
     return tuple(unique)
 
 
-_FROM = {"request": "from the request", "preference": "a preference", "llm": "the LLM"}
+_FROM = {"request": "the request", "preference": "a preference", "llm": "the LLM"}
+
+
+def contradiction(conflict: Sequence[Relation | Choice]) -> str:
+    """The one-line message for stated relations that contradict each other (clingo's
+    minimal conflict), each in the words it was stated in and saying where it came from."""
+    sources = {c.options[0][0].source if isinstance(c, Choice) else c.source
+               for c in conflict}
+    whose = "preferences" if sources == {"preference"} else \
+        "the request's relations" if sources == {"request"} else \
+        "the request's relations and the preferences"
+    said = []
+    for c in conflict:
+        first = c.options[0][0] if isinstance(c, Choice) else c
+        words = c.words if isinstance(c, Choice) else first.line
+        said.append(f"{words or first.sentence()!r} ({_FROM.get(first.source, first.source)})")
+    return f"{whose} contradict each other: {'; '.join(said)}"
 
 
 def covers(preferences: Sequence[Relation], items: Sequence[Item]) -> bool:
@@ -180,25 +218,30 @@ def merge(preferences: Sequence[Relation], llm: Sequence[Relation]
     return tuple(kept), tuple(overridden)
 
 
-def stated_gaps(preferences: Sequence[Relation], table: Table
+def stated_gaps(stated: Sequence[Relation], table: Table
                 ) -> dict[tuple[str, str, str | None], float]:
-    """The gaps, metres, that preferences state in their sentences, by relation key.
+    """The gaps, metres, that the request or the preferences state, by relation key.
 
-    Raises :class:`BadInput` for a negative gap or one wider than the table.
+    Raises :class:`BadInput` for a gap longer than the table along the axis the relation
+    moves on (its width for "to the left of", its depth for "above", either for a
+    diagonal).
     """
     out = {}
-    for r in preferences:
-        line = r.line or ""
-        if re.search(r"(?<![\w.])-\s*\d", line):
-            raise BadInput(f"preference {line!r}: a distance must not be negative")
-        gap_m, defaulted = parse_distance_m(line)
-        if defaulted:
+    for r in stated:
+        if r.gap_m is None:
             continue
-        if gap_m > max(table.width, table.depth):
-            raise BadInput(f"preference {line!r}: {100 * gap_m:g} cm does not fit on the "
-                           f"{table.label}")
-        out[r.key()] = gap_m
+        dx, dy = DIRECTION.get(r.relation, (0, 0))
+        room = min([table.width] * bool(dx) + [table.depth] * bool(dy) or
+                   [max(table.width, table.depth)])
+        if r.gap_m > room:
+            raise BadInput(f"{_where(r)} {r.line or r.sentence()!r}: {100 * r.gap_m:g} cm "
+                           f"does not fit on the {table.label}")
+        out[r.key()] = r.gap_m
     return out
+
+
+def _where(r: Relation) -> str:
+    return "request:" if r.source == "request" else "preference"
 
 
 class _PreferenceFile(BaseModel):

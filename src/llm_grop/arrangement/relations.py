@@ -1,46 +1,25 @@
-"""Template 1, its grammar, follow-up prompts, and the parser of LLM answers (paper §III-A).
+"""Template 1, its grammar and follow-up prompts (paper §III-A).
 
 The prompts are the authors' wording, kept in ``prompts/*.txt``; the grammars
 (GBNF, for llama.cpp backends) only constrain the *form* of an answer to the
-template's "Place the X <relation> the Y." lines over the requested objects.
-:func:`parse_relations` reads real, free LLM text (numbering, markdown,
-synonyms, paraphrases, several relations per line); how, is documented in
-:mod:`llm_grop.arrangement.answer_reader`.
-
-``ParsedAnswer.ignored`` lists the lines from which something was dropped
-(an unrequested object, a self-relation, a negated relation) and the lines that
-mention an object yet yield no relation. Lines that mention no object at all
-("Sure! Here is a typical arrangement:") are pure filler and are not listed.
-Listed lines are cut to 120 characters, and past 20 of them a last entry counts the
-rest ("… and 57 more lines"; see :mod:`~llm_grop.arrangement.answer_reader`).
+template's "Place the X <relation> the Y." lines over the requested objects. The answers,
+real and free LLM text (numbering, markdown, synonyms, paraphrases, several relations per
+line), are read by :func:`llm_grop.language.answer_reader.parse_relations`.
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Sequence
-from dataclasses import dataclass
 from importlib import resources
 
-from llm_grop.arrangement.answer_reader import read_answer
 from llm_grop.world.arrangement import Item
-from llm_grop.world.catalog import Catalog
-from llm_grop.world.relation import CENTER, RELATION_NAMES, Relation
+from llm_grop.world.relation import CENTER, RELATION_NAMES
 
 #: Template 1's [spatial relationships] slot, in the authors' wording.
 SPATIAL_RELATIONSHIPS = ", ".join(RELATION_NAMES[:-1]) + ", and " + RELATION_NAMES[-1]
 #: The options a follow-up may use: every relation between two objects.
 PAIR_RELATIONSHIPS = ", ".join(RELATION_NAMES[:-2]) + ", and " + RELATION_NAMES[-2]
-
-
-@dataclass(frozen=True)
-class ParsedAnswer:
-    """What an answer says: its relations in line order, the requested item names
-    no relation mentions, and the source lines it could not fully use."""
-
-    relations: tuple[Relation, ...]
-    missing: tuple[str, ...]
-    ignored: tuple[str, ...]
 
 
 @functools.lru_cache(maxsize=8)
@@ -120,12 +99,3 @@ def template1_grammar(items: Sequence[Item]) -> str:
 def followup_grammar(missing: str, anchor: str) -> str:
     """GBNF: one line relating ``missing`` and ``anchor``, either one as the subject."""
     return _grammar("line", [(missing, anchor), (anchor, missing)], [])
-
-
-def parse_relations(text: str, items: Sequence[Item], catalog: Catalog) -> ParsedAnswer:
-    """The relations an LLM answer states between the requested ``items``, in line order,
-    with the item names no relation mentions and the lines that could not be fully used."""
-    relations, ignored = read_answer(text, items, catalog)
-    mentioned = {r.subject for r in relations} | {r.reference for r in relations}
-    missing = tuple(it.name for it in items if it.name not in mentioned)
-    return ParsedAnswer(tuple(relations), missing, tuple(ignored))

@@ -10,6 +10,7 @@ import click
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
+    NO_GUESS,
     TABLE,
     StagedOutputs,
     check_outputs,
@@ -33,14 +34,15 @@ from llm_grop.world.table import Table
 @click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write a top-down PNG of the table here.")
 @llm_flags
+@NO_GUESS
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def arrange(request: str | None, task: int | None, table: Table | None, seed: int,
             json_path: Path | None, image_path: Path | None, record_path: Path | None,
-            catalog_files: tuple[Path, ...], quiet: bool, **flags: Any) -> None:
+            catalog_files: tuple[Path, ...], quiet: bool, no_guess: bool, **flags: Any) -> None:
     """Arrange the objects of REQUEST on the table (paper §III-A, §III-B).
 
-    REQUEST is in your own words ("a mug of coffee on a coaster and the usual"): the
-    catalog matcher reads what it can, and the LLM the rest.
+    REQUEST is in your own words ("a plate with a fork on its left", "breakfast for
+    two"): the catalog matcher reads it when it knows every word, else the LLM reads it.
     """
     from rich.console import Console
 
@@ -62,7 +64,7 @@ def arrange(request: str | None, task: int | None, table: Table | None, seed: in
         result = api_arrange(request, task=task, llm=flags["backend"], llm_options=llm_options,
                              table=table if table is not None else Table(), seed=seed,
                              catalog_files=catalog_files, options=options, record=record_path,
-                             on_event=on_event)
+                             on_event=on_event, guess=not no_guess)
     with StagedOutputs() as outputs:
         outputs.write("json", json_path,
                       lambda p: write_json(p, arrangement_to_dict(result.arrangement)))

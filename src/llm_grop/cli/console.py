@@ -41,6 +41,13 @@ def print_arrangement(result: ArrangementResult, console: Console,
     a = result.arrangement
     # The request is the user's text: never rich markup.
     console.print(Text.assemble(("Request:", "bold"), f" {a.request}"))
+    if a.read_by is not None and any(source != "task" for _, source, _ in a.origins):
+        who = "the catalog matcher alone" if a.read_by == "catalog" or a.llm is None else \
+            f"the LLM ({a.llm.backend} / {a.llm.model})"
+        chosen = list(dict.fromkeys(n.rsplit(" ", 1)[0] if n[-1:].isdigit() else n
+                                    for n, source, _ in a.origins if source == "llm"))
+        console.print(Text.assemble(("Read by:", "bold"), f" {who}" + (
+            f"; it chose {', '.join(chosen)}" if chosen else "")))
     size = (f"round, {a.table.width:g} m across" if a.table.is_round
             else f"{a.table.width:g} x {a.table.depth:g} m")
     seats = f", {len(a.table.diners)} diners" if len(a.table.diners) > 1 else ""

@@ -241,6 +241,12 @@ SIMULATOR = click.option(
     help="The simulator that executes the plan (see `llm-grop plugins`).")
 
 
+NO_GUESS = click.option(
+    "--no-guess", "no_guess", is_flag=True,
+    help="Refuse a request the LLM would have to complete: objects it does not name "
+         "(a meal, 'coffee'), or how many.")
+
+
 def llm_flags(f: F) -> F:
     """Add the LLM and arrangement flags to a command."""
     for option in reversed(_LLM_OPTIONS):

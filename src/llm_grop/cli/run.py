@@ -12,6 +12,7 @@ from llm_grop.cli.options import (
     EPILOG,
     FEASIBILITY,
     FIDELITY_WEIGHT,
+    NO_GUESS,
     SIMULATOR,
     TABLE,
     StagedOutputs,
@@ -54,6 +55,7 @@ from llm_grop.world.table import Table
 @click.option("--video", "video_path", type=click.Path(dir_okay=False, path_type=Path),
               help="--simulator mujoco: write an MP4 video of the episode.")
 @llm_flags
+@NO_GUESS
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
         chairs: int | None, table: Table | None, simulator: str, feasibility: str,
@@ -61,7 +63,7 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
         json_path: Path | None,
         image_path: Path | None, table_image: Path | None, room_image: Path | None,
         video_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
-        quiet: bool, **flags: Any) -> None:
+        quiet: bool, no_guess: bool, **flags: Any) -> None:
     """Set the table in a simulated dining room: arrange, plan, execute (paper §III-C)."""
     from rich.console import Console
 
@@ -92,7 +94,7 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
                              options=options, record=record_path,
                              planner=GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w),
                              simulator=sim, feasibility=feasibility,
-                             on_event=on_event)
+                             on_event=on_event, guess=not no_guess)
         outputs.write("json", json_path, lambda p: write_json(p, run_to_dict(result)))
         if image_path is not None:
             from llm_grop.render.room import draw_run

@@ -34,9 +34,9 @@ from llm_grop.evaluation.conventions import Conventions, load_conventions
 from llm_grop.evaluation.diners import diner_docs, per_diner_kinds, several_diners
 from llm_grop.evaluation.model import Check, Setting, kind_of, read_setting
 from llm_grop.evaluation.rules import RULES
+from llm_grop.language.request import parse_request
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.contract import ArrangementDoc, CheckDoc, RatingDoc
-from llm_grop.world.request import parse_request
 from llm_grop.world.serialize import read_doc
 
 #: The arrangement JSON's fields the rater reads.

@@ -10,6 +10,10 @@ from llm_grop.world.llmlog import LLMSummary
 from llm_grop.world.relation import Relation
 from llm_grop.world.table import Table
 
+#: Where a requested object came from: the request names it ("request"), the LLM chose
+#: it because the request does not name it, or not how many ("llm"), or a task lists it.
+ITEM_SOURCES: tuple[str, ...] = ("request", "llm", "task")
+
 
 @dataclass(frozen=True)
 class Item:
@@ -18,11 +22,16 @@ class Item:
     The first instance of a kind is named after it ("dinner fork"); further ones
     get a number ("dinner fork 2"). ``diner`` is the index of the diner whose setting
     it belongs to (into the table's ``diners``), ``None`` for a request with one diner.
+    ``source`` says where it came from (one of :data:`ITEM_SOURCES`: the request names it,
+    the LLM chose it, or the paper's task lists it) and ``words`` the request's words it
+    was read from.
     """
 
     name: str
     spec: ObjectSpec
     diner: int | None = None
+    source: str = "request"
+    words: str = ""
 
     @property
     def kind(self) -> str:
@@ -87,3 +96,5 @@ class Arrangement:
     conflicts: tuple[tuple[Relation, ...], ...] = field(default=())
     #: How the request's objects were read: ``"catalog"``, ``"llm"``, or ``None`` unknown.
     read_by: str | None = None
+    #: Where each object came from: ``(name, source, words)`` (see :class:`Item`).
+    origins: tuple[tuple[str, str, str], ...] = ()

@@ -99,6 +99,11 @@ class ObjectDoc(Doc):
                                                 "a trailing number)")
     height: Annotated[float, Strict(), Field(ge=0, allow_inf_nan=False)] | None = Field(
         None, description="metres")
+    source: Literal["request", "llm", "task"] | None = Field(
+        None, description="where the object came from: the request names it, the LLM chose "
+                          "it (the request does not name it, or not how many), or the "
+                          "paper's task lists it")
+    words: Text | None = Field(None, description="the request's words it was read from")
 
 
 class RelationDoc(Doc):
@@ -112,6 +117,10 @@ class RelationDoc(Doc):
     source: Literal["llm", "preference", "request"] | None = Field(
         None, description="where the relation came from: the LLM's answer, a stated "
                           "preference, or the request's own words")
+    words: Text | None = Field(None, description="the request's words that state it "
+                                                 "(source request)")
+    gap_m: Num | None = Field(None, description="the gap between the objects' edges the "
+                                                "user stated, metres")
 
 
 class LLMCallDoc(Doc):
@@ -152,8 +161,8 @@ class ArrangementDoc(Doc):
     conflicts: list[list[RelationDoc]] = Field(
         [], description="per rejected LLM answer, the minimal set of conflicting lines")
     request_read_by: Literal["catalog", "llm"] | None = Field(
-        None, description="how the request's objects were read: by the catalog matcher "
-                          "alone, or with an LLM for what the matcher could not read")
+        None, description="how the request was read: by the catalog matcher alone, or by an "
+                          "LLM that read the whole request")
 
 
 class StepDoc(Doc):

@@ -39,16 +39,24 @@ def read_doc(model: type[D], data: Any, where: str) -> D:
 
 
 def _relation(rel: Relation, line: bool = False) -> RelationDoc:
-    extra = {"line": rel.line} if line else {}
+    extra: dict[str, Any] = {"line": rel.line} if line else {}
+    if rel.source == "request" and rel.line:
+        extra["words"] = rel.line
+    if rel.gap_m is not None:
+        extra["gap_m"] = rounded(rel.gap_m)
     return RelationDoc(subject=rel.subject, relation=rel.relation, reference=rel.reference,
                        source=rel.source, **extra)
 
 
-def _object(p: Placement) -> ObjectDoc:
+def _object(p: Placement, origin: tuple[str, str] | None = None) -> ObjectDoc:
+    extra: dict[str, Any] = {"diner": p.diner} if p.diner is not None else {}
+    if origin is not None:
+        extra["source"] = origin[0]
+        if origin[1]:
+            extra["words"] = origin[1]
     return ObjectDoc(name=p.name, x=rounded(p.x), y=rounded(p.y), yaw=rounded(p.yaw),
                      shape=p.shape, size=(rounded(p.size[0]), rounded(p.size[1])), on=p.on,
-                     kind=p.kind or p.name, height=rounded(p.height),
-                     **({"diner": p.diner} if p.diner is not None else {}))
+                     kind=p.kind or p.name, height=rounded(p.height), **extra)
 
 
 def _call(c: CallRecord) -> LLMCallDoc:
@@ -61,6 +69,7 @@ def arrangement_doc(a: Arrangement, *, llm_log: bool = True) -> ArrangementDoc:
     """The contract's arrangement document of ``a``; ``llm_log=False`` leaves the LLM's
     call log out (its backend, model and call count stay)."""
     llm: dict[str, Any] = {}
+    origins = {name: (source, words) for name, source, words in a.origins}
     if a.llm is not None:
         log = {"log": [_call(c) for c in a.llm.calls]} if llm_log else {}
         llm["llm"] = LLMDoc(backend=a.llm.backend, model=a.llm.model, calls=len(a.llm.calls),
@@ -71,7 +80,7 @@ def arrangement_doc(a: Arrangement, *, llm_log: bool = True) -> ArrangementDoc:
                        size=(rounded(a.table.width), rounded(a.table.depth)),
                        **({"diners": [tuple(rounded(v) for v in s.as_list())
                                       for s in a.table.diners]} if a.table.diners else {})),
-        objects=[_object(p) for p in a.placements],
+        objects=[_object(p, origins.get(p.name)) for p in a.placements],
         relations=[_relation(r) for r in a.relations],
         **llm,
         warnings=list(a.warnings),
@@ -98,13 +107,16 @@ def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -
         placements.append(Placement(o.name, o.x, o.y, o.yaw, o.shape or "box", o.size, o.on,
                                     o.kind or o.name, o.height or 0.0, o.diner))
     try:
-        relations = tuple(Relation(r.subject, r.relation, r.reference, source=r.source or "llm")
+        relations = tuple(Relation(r.subject, r.relation, r.reference, r.words or "",
+                                   source=r.source or "llm", gap_m=r.gap_m)
                           for r in doc.relations)
     except ValueError as exc:
         raise BadInput(f"{where}: relations: {exc}") from None
     llm = LLMSummary(doc.llm.backend, doc.llm.model) if doc.llm is not None else None
+    origins = tuple((o.name, o.source, o.words or "") for o in doc.objects
+                    if o.source is not None)
     return Arrangement(doc.request, table_of(doc, where), tuple(placements), relations, llm,
-                       tuple(doc.warnings), read_by=doc.request_read_by)
+                       tuple(doc.warnings), read_by=doc.request_read_by, origins=origins)
 
 
 def table_of(doc: ArrangementDoc, where: str = "arrangement") -> Table:

@@ -1,6 +1,6 @@
 """Cutting an LLM's answer into tokens: source lines, sentences, words, and the object
 mentions and relation phrases among the words (the first half of
-:mod:`llm_grop.arrangement.answer_reader`, whose docstring says how an answer is read).
+:mod:`llm_grop.language.answer_reader`, whose docstring says how an answer is read).
 
 Tokenising is stateless: a sentence's tokens depend only on its words, the requested
 items and the catalog. Every step is linear in the length of the text, so that a
@@ -9,20 +9,14 @@ megabyte-long answer is read in a fraction of a second.
 
 from __future__ import annotations
 
-import functools
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
-from importlib import resources
 from typing import NamedTuple
 
-import yaml
-
+from llm_grop.language.vocabulary import ARTICLES, expand_its, phrase_table
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog, ObjectSpec, normalize_name, singular_forms
-from llm_grop.world.relation import RELATION_NAMES
 
-_ARTICLES = frozenset({"the", "a", "an"})
 #: The leading words :func:`~llm_grop.world.catalog.normalize_name` drops ("one fork").
 _NAME_ARTICLES = frozenset({"the", "a", "an", "one", "some", "another"})
 _NEGATIONS = frozenset({"not", "never", "don't", "dont", "doesn't", "shouldn't", "avoid",
@@ -37,34 +31,6 @@ _WORD_KINDS = {"and": "and", "&": "and", "with": "with", "which": "which", "that
 THINGS = ("obj", "foreign")
 
 
-@dataclass(frozen=True)
-class _PhraseTable:
-    """Phrase (as words) -> (relation name, whether it is bare: takes no reference)."""
-
-    phrases: dict[tuple[str, ...], tuple[str, bool]]
-    fillers: frozenset[str]
-    longest: int
-    #: Every non-empty prefix of a phrase, so a match can stop as soon as none continues.
-    prefixes: frozenset[tuple[str, ...]]
-
-
-@functools.lru_cache(maxsize=1)
-def _phrase_table() -> _PhraseTable:
-    data = yaml.safe_load(resources.files("llm_grop.arrangement").joinpath(
-        "prompts/relation_phrases.yaml").read_text("utf-8"))
-    phrases: dict[tuple[str, ...], tuple[str, bool]] = {}
-    for section, bare in (("relations", False), ("bare", True)):
-        for relation, texts in data[section].items():
-            if relation not in RELATION_NAMES:
-                raise ValueError(f"relation_phrases.yaml: {section}: unknown relation "
-                                 f"{relation!r}")
-            for text in texts:
-                phrases.setdefault(tuple(str(text).split()), (relation, bare))
-    prefixes = frozenset(p[:k] for p in phrases for k in range(1, len(p) + 1))
-    return _PhraseTable(phrases, frozenset(data.get("fillers", ())),
-                        max(len(p) for p in phrases), prefixes)
-
-
 # One or more numberings, bullets and labels at the start of a line, taken in one match
 # (removing them one at a time copied the rest of the line each time: quadratic).
 _NUMBERING = re.compile(
@@ -75,8 +41,6 @@ _MARKDOWN = re.compile(r"[*_`#|]+")
 _SPACES = re.compile(r"\s+")
 _SPACE_BEFORE_PUNCTUATION = re.compile(r"\s+([,.:;!?])")
 _NOT_WORD = re.compile(r"[^a-z0-9' ]+")
-_ITS = re.compile(r"\b(?:to|on|at)\s+(?:the\s+)?its\s+(left|right|upper left|upper right|"
-                  r"lower left|lower right)(?:\s+hand)?(?:\s+side)?\b")
 
 
 class Tok(NamedTuple):
@@ -110,9 +74,9 @@ def sentences(line: str) -> list[str]:
 def words(sentence: str) -> list[str]:
     """A sentence's words: lower case, ASCII letters, digits and "'", no articles."""
     text = sentence.lower().replace("’", "'").replace("-", " ").replace("–", " ")
-    text = _ITS.sub(lambda m: f"to the {m.group(1)} of it", text)
+    text = expand_its(text)
     text = _NOT_WORD.sub(" ", text)
-    return [w.strip("'") for w in text.split() if w not in _ARTICLES and w.strip("'")]
+    return [w.strip("'") for w in text.split() if w not in ARTICLES and w.strip("'")]
 
 
 class Tokenizer:
@@ -127,7 +91,7 @@ class Tokenizer:
         self.catalog = catalog
         self.kinds = {it.kind for it in items}
         self.aliases = catalog.aliases()
-        self.table = _phrase_table()
+        self.table = phrase_table()
         instances = {it.name for it in items}
         # Instances matched as written ("dinner fork 2"); a kind's name is looked up.
         self._instances = {tuple(n.split()): n for n in instances
@@ -165,7 +129,7 @@ class Tokenizer:
             hit = None
             if word in self._starters or self._is_last(word):
                 hit = self._object_at(words, i)
-            if hit is None and word not in table.fillers and (word,) in table.prefixes:
+            if hit is None and table.starts(word):
                 hit = self._phrase_at(words, i)
             if hit is not None:
                 out.append(hit)
@@ -239,20 +203,6 @@ class Tokenizer:
         return None
 
     def _phrase_at(self, words: list[str], i: int) -> Tok | None:
-        """The longest relation phrase starting at ``words[i]``, fillers skipped inside."""
-        table = self.table
-        if words[i] in table.fillers:
-            return None
-        kept: tuple[str, ...] = ()
-        best: Tok | None = None
-        j = i
-        while j < len(words) and len(kept) < table.longest:
-            if words[j] not in table.fillers:
-                kept += (words[j],)
-                if kept not in table.prefixes:
-                    break
-                hit = table.phrases.get(kept)
-                if hit is not None:
-                    best = Tok("rel", hit[0], bare=hit[1], pos=i, end=j + 1)
-            j += 1
-        return best
+        """The longest relation phrase starting at ``words[i]``, skipped words passed over."""
+        m = self.table.match(words, i)
+        return None if m is None else Tok("rel", m.relation, bare=m.bare, pos=i, end=m.end)

@@ -1,5 +1,5 @@
-"""Reading spatial relations out of an LLM's free text (the parser behind
-:func:`llm_grop.arrangement.relations.parse_relations`).
+"""Reading spatial relations out of free text: an LLM's answers to Template 1 and its
+follow-ups, and the user's preferences (:func:`parse_relations`).
 
 How an answer is read:
 
@@ -11,8 +11,10 @@ How an answer is read:
 * Objects are found through the catalog (names, synonyms, plurals: "fork" is
   the dinner fork, "teacup" the mug, "coaster" the mug mat), longest first.
   Catalog objects that were not requested are *unrequested*.
-* Relation phrases come from ``prompts/relation_phrases.yaml`` (paraphrases such
-  as "on the left-hand side of", "behind", "in front of", "in" for "on top of").
+* Relation phrases come from the one vocabulary, ``language/vocabulary.yaml``
+  (paraphrases such as "on the left-hand side of", "behind", "in front of", "in" for "on
+  top of"). Its ambiguous words become choices: "S beside R" (left or right) and "S1 and
+  S2 either side of R" (:attr:`ParsedAnswer.choices`).
 * Forms read: ``S <rel> R``; ``S1 and S2 <rel> R`` (each subject); ``S <rel> R
   and T <rel2> U`` (several on one line); ``S <rel> R and T <rel2>`` (T shares
   the line's last reference: "the fork to the left of the plate and the knife
@@ -51,7 +53,7 @@ How an answer is read:
   the same relation ("one fork to the left of the other fork"). "dinner fork
   2" is matched as written.
 
-Cutting lines into sentences, words and tokens is :mod:`llm_grop.arrangement.answer_tokens`;
+Cutting lines into sentences, words and tokens is :mod:`llm_grop.language.answer_tokens`;
 this module reads relations out of the tokens. Both work in time linear in the answer's
 length (a megabyte-long answer takes well under a second).
 """
@@ -63,10 +65,11 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from llm_grop.arrangement.answer_tokens import THINGS, Tok, Tokenizer, clean, sentences
+from llm_grop.language.answer_tokens import THINGS, Tok, Tokenizer, clean, sentences
+from llm_grop.language.vocabulary import BESIDE, EITHER_SIDE, beside, either_side
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.relation import CENTER, DIRECTION, STACKING, Relation
+from llm_grop.world.relation import CENTER, DIRECTION, STACKING, Choice, Relation
 
 #: Most words between a reference and a phrase that continues its clause
 #: ("the plate, slightly above ..."), so far-off prose does not.
@@ -121,7 +124,8 @@ def _combine(rels: tuple[str, ...]) -> str:
     directional = [r for r in rels if r in DIRECTION and r not in STACKING]
     if not directional:
         stacking = [r for r in rels if r in STACKING]
-        return stacking[-1] if stacking else CENTER
+        ambiguous = [r for r in rels if r in (BESIDE, EITHER_SIDE)]
+        return stacking[-1] if stacking else ambiguous[-1] if ambiguous else CENTER
     dx = next((DIRECTION[r][0] for r in reversed(directional) if DIRECTION[r][0]), 0)
     dy = next((DIRECTION[r][1] for r in reversed(directional) if DIRECTION[r][1]), 0)
     if any(DIRECTION[r][0] and DIRECTION[r][1] for r in directional):
@@ -132,6 +136,7 @@ def _combine(rels: tuple[str, ...]) -> str:
 @dataclass
 class _LineResult:
     relations: list[Relation]
+    choices: list[Choice] = field(default_factory=list)
     dropped: bool = False
     last_reference: str | None = None
     last_subjects: list[str] = field(default_factory=list)
@@ -151,11 +156,20 @@ def _read_sentence(toks: list[Tok], reader: _Reader, line: str, out: _LineResult
         if not subjects or (ref_tok is not None and reference is None):
             out.dropped = True
             return
+        if rel in (BESIDE, EITHER_SIDE) and (reference is None or reference in subjects or (
+                rel == EITHER_SIDE and len(subjects) != 2)):
+            out.dropped = True
+            return
+        if rel == EITHER_SIDE:
+            out.choices.append(either_side(subjects[0], subjects[1], reference, _kept(line)))
         for subject in subjects:
             if subject == reference:
                 out.dropped = True
                 continue
-            out.relations.append(Relation(subject, rel, reference, _kept(line)))
+            if rel == BESIDE:
+                out.choices.append(beside(subject, reference, _kept(line)))
+            elif rel != EITHER_SIDE:
+                out.relations.append(Relation(subject, rel, reference, _kept(line)))
             reader.used_as_subject.add(subject)
             reader.mention(subject)
         out.last_subjects = subjects
@@ -325,10 +339,22 @@ def _shorten(line: str) -> str:
     return line[:MAX_IGNORED_CHARS - 1].rstrip() + "…"
 
 
-def read_answer(text: str, items: Sequence[Item], catalog: Catalog
-                ) -> tuple[list[Relation], list[str]]:
-    """The relations ``text`` states between ``items``, and the lines it could not fully use
-    (both as cleaned source lines; see the module docstring).
+@dataclass(frozen=True)
+class ParsedAnswer:
+    """What an answer says: its relations in line order, the ambiguous ones ("the knife
+    beside the plate") as choices, the requested item names neither mentions, and the
+    source lines it could not fully use."""
+
+    relations: tuple[Relation, ...]
+    missing: tuple[str, ...]
+    ignored: tuple[str, ...]
+    choices: tuple[Choice, ...] = ()
+
+
+def parse_relations(text: str, items: Sequence[Item], catalog: Catalog) -> ParsedAnswer:
+    """The relations ``text`` (an LLM's answer, a preference) states between the requested
+    ``items``, in line order, with the item names no relation mentions and the lines that
+    could not be fully used (see the module docstring).
 
     Ignored lines are shortened to :data:`MAX_IGNORED_CHARS` characters and, past the
     first :data:`MAX_IGNORED_LINES` different ones, counted in a last entry
@@ -336,6 +362,7 @@ def read_answer(text: str, items: Sequence[Item], catalog: Catalog
     """
     reader = _Reader(items, catalog)
     relations: list[Relation] = []
+    choices: list[Choice] = []
     ignored: list[str] = []
     seen: set[str] = set()
     for raw in text.splitlines():
@@ -349,11 +376,17 @@ def read_answer(text: str, items: Sequence[Item], catalog: Catalog
             mentions = mentions or any(t.kind in THINGS for t in toks)
             _read_sentence(toks, reader, source, result)
         relations += _merge_diagonals(result.relations)
+        choices += result.choices
         short = _shorten(source)
-        if (result.dropped or (mentions and not result.relations)) and short not in seen:
+        if (result.dropped or (mentions and not result.relations and not result.choices)) \
+                and short not in seen:
             seen.add(short)
             if len(ignored) < MAX_IGNORED_LINES:
                 ignored.append(short)
     if len(seen) > len(ignored):
         ignored.append(f"… and {len(seen) - len(ignored)} more lines")
-    return relations, ignored
+    mentioned = {r.subject for r in relations} | {r.reference for r in relations} | {
+        r.subject for c in choices for o in c.options for r in o} | {
+        r.reference for c in choices for o in c.options for r in o}
+    missing = tuple(it.name for it in items if it.name not in mentioned)
+    return ParsedAnswer(tuple(relations), missing, tuple(ignored), tuple(choices))

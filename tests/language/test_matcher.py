@@ -1,12 +1,13 @@
-"""Reading natural-language requests into catalog items."""
+"""The catalog matcher (the fast path): natural-language requests into catalog items."""
 
 from __future__ import annotations
 
 import pytest
 
 from llm_grop.errors import BadInput, UnknownObject
+from llm_grop.language.request import parse_request
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.request import MAX_OBJECTS, Request, items_from_names, parse_request
+from llm_grop.world.request import MAX_COUNT, MAX_OBJECTS, Request, items_from_names
 
 
 @pytest.fixture(scope="module")
@@ -106,8 +107,8 @@ def test_unknown_modifier_is_part_of_the_unknown_name(catalog: Catalog) -> None:
     ("two and a plate", "'two' is not followed by an object name"),
     ("0 forks", "a count must be at least 1"),
     ("a mug or a cup", "'or' leaves the choice open"),
-    (f"{MAX_OBJECTS + 1} forks", f"at most {MAX_OBJECTS}"),
-    ("twenty forks and eleven knives", f"31 objects is too many; at most {MAX_OBJECTS}"),
+    (f"{MAX_COUNT + 1} forks", f"at most {MAX_COUNT} of one object"),
+    ("12 forks, 12 knives and 7 plates", f"31 objects is too many; at most {MAX_OBJECTS}"),
 ])
 def test_bad_counts_and_choices_are_bad_input(text: str, message: str, catalog: Catalog
                                               ) -> None:
@@ -116,8 +117,9 @@ def test_bad_counts_and_choices_are_bad_input(text: str, message: str, catalog: 
     assert not isinstance(info.value, UnknownObject)
 
 
-def test_exactly_the_cap_is_allowed(catalog: Catalog) -> None:
-    assert len(parse_request(f"{MAX_OBJECTS} strawberries", catalog).items) == MAX_OBJECTS
+def test_exactly_the_caps_are_allowed(catalog: Catalog) -> None:
+    assert len(parse_request("12 forks, 12 knives and 6 plates", catalog).items) == MAX_OBJECTS
+    assert len(parse_request(f"{MAX_COUNT} strawberries", catalog).items) == MAX_COUNT
 
 
 def test_user_catalog_objects_are_recognised(tmp_path, catalog: Catalog) -> None:

@@ -1,0 +1,131 @@
+"""Cutting a request into tokens: words (lower case), numbers, separators and sentence
+ends, with their offsets in the text, and "on its left" written "to the left of it" so
+that the pronoun is read as a reference (the first step of :mod:`llm_grop.language.matcher`).
+"""
+
+from __future__ import annotations
+
+import re
+import unicodedata
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+from llm_grop.language.vocabulary import request_words
+
+#: A word, or a number with its decimals: "2.5 cm" is one number and a unit.
+_TOKEN = re.compile(r"[0-9]+(?:\.[0-9]+)?|[^\W\d_]+(?:'[^\W\d_]+)*")
+#: Characters that end a sentence (other separators only separate objects).
+_SENTENCE_END = frozenset(".!?\n")
+#: Centimetres per unit of a stated distance.
+UNIT_CM: dict[str, float] = {
+    **dict.fromkeys(("cm", "cms", "centimetre", "centimetres", "centimeter", "centimeters"),
+                    1.0),
+    **dict.fromkeys(("mm", "millimetre", "millimetres", "millimeter", "millimeters"), 0.1),
+    **dict.fromkeys(("m", "metre", "metres", "meter", "meters"), 100.0),
+    **dict.fromkeys(("inch", "inches"), 2.54),
+    **dict.fromkeys(("foot", "feet", "ft"), 30.48),
+}
+
+
+@dataclass(frozen=True)
+class Token:
+    """A word of the request (lower case), ``","`` for a separator or ``"."`` for a sentence
+    end, with its character offsets in the text read."""
+
+    word: str
+    start: int
+    end: int
+
+
+def normalized(text: str) -> str:
+    """``text`` in the form the matcher reads: NFKC (fullwidth letters and digits become
+    ASCII, ligatures split) except for other numerals such as '²' and '①', which stay
+    as they are rather than become counts; typographic apostrophes and dashes made plain."""
+    if text.isascii():
+        return text
+    out = [c if unicodedata.category(c) == "No" else unicodedata.normalize("NFKC", c)
+           for c in text]
+    return "".join(out).replace("\u2019", "'").replace("\u2018", "'").translate(
+        str.maketrans(dict.fromkeys("\u2010\u2011\u2012\u2013\u2014\u2212", "-")))
+
+
+def is_number(word: str) -> bool:
+    """Whether ``word`` is a count in ASCII digits (``str.isdigit`` also accepts '²')."""
+    return word.isascii() and word.isdigit() and len(word) <= 6
+
+
+def tokens(text: str) -> list[Token]:
+    """The words of ``text`` (lower case; hyphens inside words read as spaces), with a
+    ``","`` token for each run of separators, a ``"."`` for a sentence end, and a ``"-"``
+    for a minus sign before a number; offsets are into ``normalized(text)``."""
+    text = normalized(text)
+    separators = request_words().separator_chars
+    out: list[Token] = []
+    pos = 0
+    for m in _TOKEN.finditer(text):
+        gap = text[pos:m.start()]
+        if _SENTENCE_END.intersection(gap.replace("...", " ")) and out:
+            out.append(Token(".", pos, m.start()))
+        elif separators.intersection(gap):
+            out.append(Token(",", pos, m.start()))
+        if m.group(0)[0].isdigit() and re.search(r"(?:^|[\s(])-\s*$", gap):
+            out.append(Token("-", m.start() - 1, m.start()))
+        out.append(Token(m.group(0).lower(), m.start(), m.end()))
+        pos = m.end()
+    return _expand_its(out)
+
+
+_ITS_DIRECTIONS = {("left",), ("right",), ("upper", "left"), ("upper", "right"),
+                   ("lower", "left"), ("lower", "right"), ("top", "left"), ("top", "right"),
+                   ("bottom", "left"), ("bottom", "right")}
+
+
+def _expand_its(toks: list[Token]) -> list[Token]:
+    """"on its left (hand side)" as "to the left of it": the pronoun becomes a reference."""
+    out: list[Token] = []
+    i = 0
+    while i < len(toks):
+        w = toks[i].word
+        j = i + 1 + (i + 1 < len(toks) and toks[i + 1].word == "the")
+        if w in ("to", "on", "at", "towards") and j < len(toks) and toks[j].word == "its":
+            for n in (2, 1):
+                words = tuple(t.word for t in toks[j + 1:j + 1 + n])
+                if len(words) == n and words in _ITS_DIRECTIONS:
+                    end = j + 1 + n
+                    while end < len(toks) and toks[end].word in ("hand", "side"):
+                        end += 1
+                    span = toks[i].start, toks[end - 1].end
+                    out += [Token(x, *span) for x in ("to", *words, "of", "it")]
+                    i = end
+                    break
+            else:
+                out.append(toks[i])
+                i += 1
+            continue
+        out.append(toks[i])
+        i += 1
+    return out
+
+
+def distance_at(words: Sequence[str], i: int, numbers: Mapping[str, int]
+                ) -> tuple[float, int] | None:
+    """The distance, centimetres, stated at ``words[i]`` ("2 cm", "2.5 centimetres", "an
+    inch", "one and a half inches"; negative after "-" or "minus"), and the index after
+    its unit; ``None`` when no number and unit start there. ``numbers``: number words."""
+    j, sign = i, 1.0
+    if words[j] in ("-", "minus"):
+        j, sign = j + 1, -1.0
+    value: float | None = None
+    if j < len(words) and re.fullmatch(r"[0-9]+(?:\.[0-9]+)?", words[j]):
+        value, j = float(words[j]), j + 1
+    elif j < len(words) and words[j] in numbers:
+        value, j = float(numbers[words[j]]), j + 1
+    elif j + 1 < len(words) and words[j] == "half" and words[j + 1] in ("a", "an"):
+        value, j = 0.5, j + 2
+    elif j < len(words) and words[j] in ("a", "an", "one"):
+        value, j = 1.0, j + 1
+    if value is not None and words[j:j + 3] == ["and", "a", "half"]:
+        value, j = value + 0.5, j + 3
+    if value is None or j >= len(words) or words[j] not in UNIT_CM:
+        return None
+    return sign * value * UNIT_CM[words[j]], j + 1
