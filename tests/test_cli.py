@@ -326,7 +326,7 @@ def test_objects_the_matcher_cannot_read_are_read_by_the_llm(chat_server, tmp_pa
         ("dinner plate", "request", "a dinner plate"), ("dinner fork", "llm", "cutlery"),
         ("dinner knife", "llm", "cutlery")]
     err = capsys.readouterr().err
-    assert ("warning: the openai LLM chose what the request does not name: 1 dinner fork "
+    assert ("warning: the openai LLM chose what the request does not say: 1 dinner fork "
             "(for 'cutlery'), 1 dinner knife (for 'cutlery'); --no-guess refuses this") in err
     assert main(["arrange", "a dinner plate and cutlery", *_openai(chat_server),
                  "--no-guess"]) == 2
@@ -361,8 +361,8 @@ def test_requests_nothing_can_read_are_one_line_errors(request_text: str, start:
 
 @pytest.mark.parametrize(("reading", "start"), [
     ('{"diners": 1, "objects": [], "relations": []}',
-     "request: nothing in 'set the table with happiness' names tableware, and the openai "
-     "LLM read no object in it either"),
+     "request: the openai LLM read no object in 'set the table with happiness'; name the "
+     "objects to set"),
     ('{"diners": 1, "objects": [{"name": "salt shaker", "count": 1, "words": "happiness"}], '
      '"relations": []}', "request: the openai LLM's reading: unknown object 'salt shaker'"),
     ('{"diners": 13, "objects": [{"name": "plate", "count": 1, "words": "table"}], '

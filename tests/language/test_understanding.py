@@ -63,7 +63,7 @@ def kinds(request: Any) -> list[str]:
 
 def test_what_the_matcher_reads_costs_no_llm_call(catalog: Catalog) -> None:
     log = no_llm()
-    request = understand("I'd like breakfast: a mug of coffee on a coaster and a bread plate "
+    request = understand("For breakfast: a mug of coffee on a coaster and a bread plate "
                          "with bread on it, if you can", catalog=catalog, llm=log)
     assert kinds(request) == ["mug", "mug mat", "bread plate", "bread"]
     assert request.source == "catalog" and not log.calls
@@ -97,7 +97,7 @@ def test_an_unknown_word_never_refuses_before_the_llm_is_asked(chat_server: Chat
     assert '"a soup bowl and something to eat soup with"' in prompt and "soup spoon" in prompt
     assert [it.source for it in request.items] == ["request", "llm"]
     assert request.guessed == ("soup spoon",)
-    assert request.warnings == ("the openai LLM chose what the request does not name: 1 soup "
+    assert request.warnings == ("the openai LLM chose what the request does not say: 1 soup "
                                 "spoon (for 'something to eat soup with'); --no-guess refuses "
                                 "this",)
 
@@ -148,8 +148,8 @@ def test_an_answer_outside_the_catalog_is_one_line_with_suggestions(
 
 def test_nothing_named_even_after_the_llm_is_bad_input(chat_server: ChatServer,
                                                        catalog: Catalog) -> None:
-    with pytest.raises(BadInput, match="nothing in 'set the table with happiness' names "
-                                       "tableware, and the openai LLM read no object"):
+    with pytest.raises(BadInput, match="the openai LLM read no object in 'set the table with "
+                                       "happiness'; name the objects to set"):
         understand("set the table with happiness", catalog=catalog,
                    llm=openai(chat_server, answer()))
 
@@ -196,9 +196,9 @@ def test_guesses_are_marked_and_no_guess_refuses_them(chat_server: ChatServer,
     request = understand("coffee and toast", catalog=catalog, llm=openai(chat_server, reply))
     assert [(it.kind, it.source, it.words) for it in request.items] == [
         ("mug", "llm", "coffee"), ("bread plate", "llm", "toast"), ("bread", "llm", "toast")]
-    assert len(request.warnings) == 1 and "chose what the request does not name" in \
+    assert len(request.warnings) == 1 and "chose what the request does not say" in \
         request.warnings[0]
-    with pytest.raises(BadInput, match=r"chose what 'a plate and coffee' does not name \(1 "
+    with pytest.raises(BadInput, match=r"chose what 'a plate and coffee' does not say \(1 "
                                        r"mug\), and --no-guess forbids it"):
         understand("a plate and coffee", catalog=catalog, guess=False, llm=openai(
             chat_server, answer(("dinner plate", 1, "a plate"), ("mug", 1, "coffee"))))
@@ -389,3 +389,30 @@ def test_any_reading_answer_reads_or_fails_in_one_line(text: str) -> None:
         assert "\n" not in str(exc) and str(exc).startswith("request")
     else:
         assert reading.objects and all(o.name in catalog.specs for o in reading.objects)
+
+
+def test_no_guess_still_asks_the_llm_about_a_typo(chat_server: ChatServer,
+                                                 catalog: Catalog) -> None:
+    log = openai(chat_server, answer(("dinner fork", 1, "a frok")))
+    request = understand("a frok please", catalog=catalog, llm=log, guess=False)
+    assert [(it.kind, it.source) for it in request.items] == [("dinner fork", "request")]
+
+
+def test_a_reading_that_leaves_out_everything_named_is_refused(chat_server: ChatServer,
+                                                                catalog: Catalog) -> None:
+    with pytest.raises(BadInput, match=r"leaves out everything 'a frok and a plate' names "
+                                       r"\(dinner plate\)"):
+        understand("a frok and a plate", catalog=catalog,
+                   llm=openai(chat_server, answer(("water cup", 10, ""))))
+
+
+def test_the_request_s_numbers_win_or_are_marked(chat_server: ChatServer,
+                                                 catalog: Catalog) -> None:
+    reply = answer(("dinner plate", 4, "a plate"), ("dinner fork", 1, "a frok"), diners=3)
+    request = understand("a plate and a frok for two", catalog=catalog,
+                         llm=openai(chat_server, reply))
+    assert request.diners == 2
+    assert {(it.kind, it.source) for it in request.items} == {
+        ("dinner plate", "llm"), ("dinner fork", "request")}
+    assert request.warnings[0] == "the request sets the table for 2; the openai LLM read 3 diners"
+    assert "4 dinner plate (for 'a plate')" in request.warnings[-1]

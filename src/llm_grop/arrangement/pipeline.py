@@ -177,8 +177,9 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
     prefs = preferences.combine(stated, read.relations)
     choices = [c for c in (*options.choices, *read.choices)
                if all(ours(option) for option in c.options)]
-    if choices and consistency.choose(prefs, choices).conflict:
-        raise BadInput(preferences.contradiction(consistency.choose(prefs, choices).conflict))
+    conflict = consistency.choose(prefs, choices).conflict if choices else ()
+    if conflict:
+        raise BadInput(preferences.contradiction(conflict))
     if preferences.covers(prefs, items):
         say("the stated relations relate every object: Template 1 is not asked")
     elif len(items) > 1:
@@ -212,8 +213,10 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
                      in zip(choices, decided.picked, decided.why, strict=True)]
     if prefs:
         accepted, overridden = preferences.merge(prefs, accepted)
+        said = {r.key() for r in prefs} | {r.converse().key() for r in prefs
+                                            if r.reference is not None}
         warnings += [f"overridden by a stated relation: {_preview(r.line or r.sentence())}"
-                     for r in overridden]
+                     for r in overridden if r.key() not in said]
     related = {r.subject for r in accepted} | {r.reference for r in accepted}
     warnings += [f"no usable relation for the {it.name}: the answers left it out, so "
                  f"the sampler places it alone" for it in items
@@ -238,7 +241,7 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
     origin, edge_gap = _edge_distance(items, accepted, llm, catalog, table, seed, options, say,
                                       warnings)
     return Setting(accepted, gaps, origin, edge_gap, tuple(attempts), tuple(dropped),
-                    tuple(warnings))
+                   tuple(dict.fromkeys(warnings)))
 
 
 def _edge_distance(items: Sequence[Item], accepted: Sequence[Relation], llm: CallLog,

@@ -74,9 +74,9 @@ def sentences(line: str) -> list[str]:
 def words(sentence: str) -> list[str]:
     """A sentence's words: lower case, ASCII letters, digits and "'", no articles."""
     text = sentence.lower().replace("’", "'").replace("-", " ").replace("–", " ")
-    text = expand_its(text)
     text = _NOT_WORD.sub(" ", text)
-    return [w.strip("'") for w in text.split() if w not in ARTICLES and w.strip("'")]
+    kept = [w.strip("'") for w in text.split() if w.strip("'")]
+    return [w for w in expand_its(kept) if w not in ARTICLES]
 
 
 class Tokenizer:

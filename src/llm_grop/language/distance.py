@@ -57,6 +57,17 @@ _DASHES = str.maketrans(dict.fromkeys("\u2010\u2011\u2012\u2013\u2014\u2212", "-
 _FRACTIONS = {"½": ".5", "¼": ".25", "¾": ".75"}
 
 
+#: A unit written as a word of its own ("cm", "centimetres", "inches"): never the word
+#: "in", which in a request is a relation ("a strawberry in the bowl").
+_UNIT_WORD = re.compile(r"centimet(?:er|re)s?|cms?|millimet(?:er|re)s?|mm|met(?:er|re)s?|m|"
+                        r"inch(?:es)?|ft|foot|feet")
+
+
+def unit_cm(word: str) -> float | None:
+    """Centimetres per unit of a unit word ("cm", "metres", "inch"), else ``None``."""
+    return _unit_cm(word) if _UNIT_WORD.fullmatch(word) else None
+
+
 def _unit_cm(unit: str) -> float:
     unit = unit.rstrip(".")
     for prefix in ("centi", "milli", "met", "cm", "mm", "in", "ft", "foot", "feet", "″", "m"):
@@ -126,4 +137,4 @@ def parse_distance_cm(text: str) -> float | None:
 
 
 
-__all__ = ["MAX_GAP_CM", "parse_distance_cm"]
+__all__ = ["MAX_GAP_CM", "parse_distance_cm", "unit_cm"]

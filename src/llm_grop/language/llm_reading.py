@@ -21,6 +21,7 @@ from importlib import resources
 from typing import Any
 
 from llm_grop.errors import BadInput, UnknownObject
+from llm_grop.language.distance import parse_distance_cm
 from llm_grop.language.reading import (
     Reading,
     ReadObject,
@@ -29,7 +30,7 @@ from llm_grop.language.reading import (
     unrelated,
 )
 from llm_grop.language.vocabulary import EITHER_SIDE, READING_RELATIONS, phrase_table
-from llm_grop.language.words import UNIT_CM, normalized
+from llm_grop.language.words import normalized
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.relation import CENTER
 from llm_grop.world.request import MAX_COUNT, MAX_DINERS
@@ -43,9 +44,13 @@ _MAX_WORDS_CHARS = 300
 
 _NUMBERING = re.compile(r"^\s*(?:[-*\u2022>]+|\(?[0-9]+[.)])\s*")
 _QUOTED = re.compile(r'^["\u201c\u2018\'](.*)["\u201d\u2019\']$')
-_DISTANCE = re.compile(r"^(-?\s*[0-9]+(?:\.[0-9]+)?)\s*([a-z]+)?$")
+_DISTANCE = re.compile(r"^-?\s*[0-9]+(?:\.[0-9]+)?\s*[a-z]*$")
 _INSTANCE = re.compile(r"^(.*?)\s+([0-9]+)$")
 _NO_REFERENCE = frozenset({"", "table", "the table", "none", "null", "-"})
+
+
+class NothingRead(BadInput):
+    """The LLM's answer names no object."""
 
 
 @functools.cache
@@ -201,6 +206,7 @@ def _relation(value: object, where: str) -> str:
 
 
 def _distance_cm(value: object, where: str) -> float | None:
+    """A relation's ``distance_cm``: a number, or text such as "2 cm" or "1 inch"."""
     if value is None or value == "":
         return None
     if isinstance(value, bool):
@@ -208,11 +214,12 @@ def _distance_cm(value: object, where: str) -> float | None:
     if isinstance(value, int | float):
         cm = float(value)
     else:
-        m = _DISTANCE.match(str(value).lower().replace(" ", ""))
-        unit = m.group(2) if m else None
-        if m is None or (unit is not None and unit not in UNIT_CM):
-            raise BadInput(f"{where}: distance {str(value)[:40]!r} is no distance")
-        cm = float(m.group(1)) * UNIT_CM.get(unit or "cm", 1.0)
+        text = str(value).strip()[:40]
+        cm = parse_distance_cm(text.lstrip("-−").strip())
+        if cm is None:
+            raise BadInput(f"{where}: distance {text!r} is no distance")
+        if text[:1] in "-−":
+            cm = -cm
     if cm != cm or cm in (float("inf"), float("-inf")):
         raise BadInput(f"{where}: distance {value!r} is no number")
     return cm
@@ -271,7 +278,9 @@ def read_reading_answer(text: str, request: str, catalog: Catalog, where: str = 
         raise BadInput(f"{where}: diners {str(diners)[:40]!r} is no whole number")
     reading = Reading(" ".join(request.split()), tuple(objects), tuple(relations), diners,
                       "llm")
-    faults = unrelated(reading, catalog) if objects else []
+    if not objects:
+        raise NothingRead(f"{where}: no object in {reading.text!r}")
+    faults = unrelated(reading, catalog)
     if faults:
         dropped = {id(r) for r, _ in faults}
         said = list(dict.fromkeys(f"'{r.subject} {r.relation} {r.reference or 'the table'}'"
@@ -298,5 +307,5 @@ def _entries(value: object) -> list[Mapping[str, Any]]:
             if isinstance(e, dict | str)]
 
 
-__all__ = ["MAX_ANSWER_CHARS", "answer_of", "read_reading_answer", "reading_grammar",
+__all__ = ["MAX_ANSWER_CHARS", "NothingRead", "answer_of", "read_reading_answer", "reading_grammar",
            "reading_prompt", "reading_schema"]

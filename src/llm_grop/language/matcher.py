@@ -17,8 +17,11 @@ from llm_grop.errors import BadInput
 from llm_grop.language.parts import Link, Mention, Unread
 from llm_grop.language.references import antecedent, resolve_references
 from llm_grop.language.vocabulary import (
+    ARTICLES,
     EITHER_SIDE,
+    PhraseMatch,
     PhraseTable,
+    dining_words,
     longest_at,
     phrase_table,
     request_words,
@@ -31,6 +34,8 @@ from llm_grop.world.request import MAX_COUNT
 #: Words after a stated distance that close it ("2 cm away").
 _AWAY = frozenset({"away", "apart", "off", "gap", "between"})
 _PRONOUNS = frozenset({"it", "them"})
+#: Separators that list objects, so that what follows may share a relation.
+_COORDINATING = frozenset({("and",), (",",), ("plus",), ("and", "also")})
 
 
 @dataclass
@@ -46,11 +51,9 @@ class MatchReader:
     parts: list[Mention | Unread] = field(default_factory=list)
     links: list[Link] = field(default_factory=list)
     doubts: list[str] = field(default_factory=list)
-    sentence_of: list[int] = field(default_factory=list)  # part index -> sentence number
     count: int | None = None          # the pending count of the next object
     count_words: tuple[str, ...] = ()
     count_start: int | None = None    # token index of the pending count
-    vague: bool = False               # the pending quantity names no number
     unknown: list[int] = field(default_factory=list)  # token indexes of an unread chunk
     tail: int = 0                     # fillers at the end of ``unknown``
     subject: int | None = None        # the part a relation phrase would start from
@@ -61,11 +64,11 @@ class MatchReader:
     contents: bool = False            # reading what the last object holds ("of water")
     written: str = ""                 # the last object's name as written
     definite: bool = False            # the word before was "the"
-    sentence: int = 0
 
     def __post_init__(self) -> None:
         self.words = [t.word for t in self.toks]
         self.vocab = request_words()
+        self.dining = dining_words()
         self.table: PhraseTable = phrase_table()
         # A possessive names its owner: "the mug's lid" is the mug lid, and "my wife's
         # mug" is a mug (an owner that is no object is a filler).
@@ -81,6 +84,7 @@ class MatchReader:
             self._sentences.append(ends)
             ends += t.word == "."
         self.after_comma: int | None = None  # the subject a "," closed
+        self.after_pronoun = False  # "a lid on it on a coaster": of which object?
         self.separator: tuple[str, ...] = ()  # the separator words just read
         #: part -> (the separator before it, the subject before that separator)
         self.joined: dict[int, tuple[tuple[str, ...], int | None]] = {}
@@ -110,6 +114,8 @@ class MatchReader:
         obj = self._object_at(i)
         if obj is not None:
             n, spec, plural = obj
+            if self.contents:
+                self.doubts.append(f"{self.written!r} of or for {' '.join(words[i:i + n])!r}")
             self._take(spec, plural, i, n, definite)
             return n
         word = words[i]
@@ -118,6 +124,7 @@ class MatchReader:
                            "name exactly the objects to set")
         if word in (",", "."):
             self._end_chunk(sentence=word == ".")
+            self.separator = (word,) if word == "," else ()
             return 1
         n_sep = longest_at(words, i, self.vocab.separator_words, self.vocab.longest)
         if n_sep:
@@ -136,7 +143,7 @@ class MatchReader:
         if distance is not None:
             return distance
         if self.subject is None and self.after_comma is not None and not self.unknown:
-            m = self.table.match(words, i)
+            m = self._phrase(i)
             if m is not None and not m.bare:
                 # "a water glass, to the left of the wine glass": the phrase is the glass's
                 self.subject, self.after_comma = self.after_comma, None
@@ -149,9 +156,14 @@ class MatchReader:
                 self.contents = True
                 return 1
         n_count = longest_at(words, i, self.vocab.counts, self.vocab.longest)
-        if self.contents and not n_count:
-            self._refine(words[i])
+        if self.contents and (n_count and (words[i],) not in self.vocab.articles
+                              or is_number(word)):
+            self.doubts.append(f"{self.written!r} of {' '.join(words[i:i + n_count])!r}")
+        if self.contents and (word in ARTICLES or any(
+                f in self.dining.contents for f in singular_forms(word))):
+            self._refine(word)
             return 1  # what the last object holds: "a mug of coffee"
+        self.contents = False  # anything else is read as itself: "without", "each"
         n_vague = longest_at(words, i, self.vocab.vague, self.vocab.longest)
         n_filler = longest_at(words, i, self.vocab.fillers, self.vocab.longest)
         n = max(n_count, n_vague, n_filler)
@@ -176,7 +188,6 @@ class MatchReader:
             self._set_count(self.vocab.counts[phrase], phrase, i)
         elif n == n_vague:
             self._set_count(None, (), i)
-            self.vague = True
         else:
             self.definite = words[i:i + n] == ["the"]
         return n
@@ -200,15 +211,25 @@ class MatchReader:
         n = longest_at(self.words, i, self.vocab.fillers, self.vocab.longest)
         return n > 1 and self.words[i] == "for"
 
+    def _phrase(self, i: int) -> PhraseMatch | None:
+        """The relation phrase at ``words[i]``, after any skipped words ("slightly to the
+        left of", "directly behind")."""
+        j = i
+        while j < len(self.words) and self.words[j] in self.table.skip:
+            j += 1
+        return self.table.match(self.words, j) if j < len(self.words) else None
+
     def _relation_at(self, i: int) -> int:
         """Reads a relation phrase of the subject at ``i``; returns the tokens used (0: none).
 
         A filler phrase at least as long wins ("on the table" is no stacking)."""
-        m = self.table.match(self.words, i)
+        m = self._phrase(i)
         if m is None or m.end - i < longest_at(self.words, i, self.vocab.fillers,
                                                self.vocab.longest):
             return 0
         assert self.subject is not None
+        if self.after_pronoun:
+            self.doubts.append("a second relation phrase after 'it': of which object?")
         start = self.subject_start
         distance = self.distance[0] if self.distance else None
         self.distance = None
@@ -287,7 +308,6 @@ class MatchReader:
     def _set_count(self, value: int | None, words: tuple[str, ...], at: int) -> None:
         self._check_no_dangling_count()
         self.count, self.count_words, self.count_start = value, words, at
-        self.vague = False
         self.contents = False
 
     def _take(self, spec: ObjectSpec, plural: bool, i: int, n: int, definite: bool) -> None:
@@ -301,7 +321,6 @@ class MatchReader:
             name = " ".join([*(self.words[k] for k in self.unknown), self.written])
             hints = [spec.name] + [s for s in self.catalog.suggest(name) if s != spec.name]
             self.parts.append(Unread(name, tuple(hints[:3])))
-            self.sentence_of.append(self.sentence)
             self.unknown.clear()
             self.subject = self.pending = None
             self.count, self.count_words, self.count_start = None, (), None
@@ -329,27 +348,48 @@ class MatchReader:
         if again:
             self.doubts.append(f"{self.written!r} again: another one, or the one named "
                                "before?")
+        if self.diners > 1 and self.count is not None and self.count > 1:
+            self.doubts.append(f"{' '.join(self.count_words)} {self.written} for "
+                               f"{self.diners} diners: each, or in all?")
         if definite and self.count is None and not plural and earlier:
             at = earlier[0]  # "the knife" of a request that named a knife already
         else:
             self.parts.append(Mention(spec, count, start, i + n))
-            self.sentence_of.append(self.sentence)
             at = len(self.parts) - 1
             if self.separator:
                 self.joined[at] = (self.separator, self.before)
+                if self.count_start is None and not definite and self.links and \
+                        self.links[-1].reference == self.before and \
+                        self.separator in _COORDINATING:
+                    # "beneath the fork and knife": of the fork alone, or of both?
+                    self.doubts.append(f"{self.written!r} joined to the object of a relation")
         self.separator = ()
+        self.after_pronoun = False
         if self.pending is not None:
             self.pending.reference, self.pending.end = at, i + n
+            self._check_shared(self.pending)
             self.links.append(self.pending)
             self.pending = None
         self.subject, self.subject_start = at, start
         self.count, self.count_words, self.count_start = None, (), None
-        self.vague = False
+
+    def _check_shared(self, link: Link) -> None:
+        """A doubt when the subject of ``link`` was listed right after another object with
+        no relation of its own ("a fork and a spoon to the left of the plate": both?)."""
+        separator, previous = self.joined.get(link.subject, ((), None))
+        related = {k.subject for k in self.links} | {k.reference for k in self.links}
+        if separator in _COORDINATING and previous is not None and previous not in related \
+                and link.relation != EITHER_SIDE:
+            said = self.parts[link.subject]
+            name = said.spec.name if isinstance(said, Mention) else "it"
+            self.doubts.append(f"does {link.relation!r} hold for what is listed before the "
+                               f"{name} too?")
 
     def _link_pronoun(self, i: int) -> None:
         assert self.pending is not None
         link, self.pending = self.pending, None
         link.kind, link.end = "pronoun", i + 1
+        self.after_pronoun = True
         if self.words[i] == "them":
             self.doubts.append("'them' may stand for several objects")
         self.links.append(link)
@@ -359,7 +399,6 @@ class MatchReader:
             kept = self.unknown[:len(self.unknown) - self.tail]
             name = " ".join(self.words[k] for k in kept)
             self.parts.append(Unread(name, tuple(self.catalog.suggest(name))))
-            self.sentence_of.append(self.sentence)
             self.unknown.clear()
             self.tail = 0
             self.subject = self.pending = None
@@ -373,15 +412,13 @@ class MatchReader:
         if self.distance is not None:
             self.doubts.append("a distance that relates no two objects")
             self.distance = None
-        self.before = self.subject if soft else None
+        self.before = None if sentence else self.subject
         self.separator = ()
         self.after_comma = self.subject if not soft and not sentence else None
         self.count, self.count_words, self.count_start = None, (), None
-        self.vague = False
         self.subject = None
         self.contents = False
-        if sentence:
-            self.sentence += 1
+        self.after_pronoun = False
 
 
 def read_words(text: str, catalog: Catalog, diners: int = 1) -> MatchReader:

@@ -156,11 +156,6 @@ def to_request(reading: Reading, catalog: Catalog, calls: Sequence[CallRecord] =
     choices: list[Choice] = []
     for r in reading.relations:
         gap = None if r.distance_cm is None else r.distance_cm / 100
-
-        def rel(subject: str, relation: str, r: ReadRelation = r, gap: float | None = gap
-                ) -> Relation:
-            return Relation(subject, relation, r.reference, r.words, "request", gap)
-
         if r.relation == BESIDE:
             assert r.reference is not None
             choices.append(beside(r.subject, r.reference, r.words, "request", gap))
@@ -169,7 +164,8 @@ def to_request(reading: Reading, catalog: Catalog, calls: Sequence[CallRecord] =
             choices.append(either_side(r.subject, r.partner, r.reference, r.words, "request",
                                        gap))
         else:
-            relations.append(rel(r.subject, r.relation))
+            relations.append(Relation(r.subject, r.relation, r.reference, r.words, "request",
+                                      gap))
     return Request(reading.text, for_diners(items, reading.diners), reading.diners,
                    tuple(relations), reading.read_by, tuple(calls), tuple(notes),
                    tuple(choices), reading.guessed)

@@ -7,7 +7,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from llm_grop.language.parts import Mention
-from llm_grop.world.relation import STACKING
 
 if TYPE_CHECKING:
     from llm_grop.language.matcher import MatchReader
@@ -19,10 +18,9 @@ def antecedent(reader: MatchReader, before: int, exclude: set[int],
     ``None`` when the request leaves it open.
 
     Of the objects written before it and not in ``exclude``, those of the nearest sentence
-    that has any count: the only one; else the object a "with" introduced the subject by
-    ("a bread plate with bread on it"); else, after "S1 left of R and S2", the reference R
-    ("... and the knife to the right of it"), unless R supports S1 ("a mug on a coaster
-    and a lid on it" leaves "it" open).
+    that has any count: the only one, else the object a "with" introduced the subject by,
+    when that object is in no relation yet ("a bread plate with bread on it"); any other
+    choice ("a bowl on a plate with a spoon next to it") is left to the LLM.
     """
     by_sentence: dict[int, list[int]] = {}
     for k, p in enumerate(reader.parts):
@@ -35,12 +33,9 @@ def antecedent(reader: MatchReader, before: int, exclude: set[int],
         return group[0]
     separator, previous = reader.joined.get(subject, ((), None)) if subject is not None \
         else ((), None)
-    if previous not in group:
-        return None
-    if separator == ("with",):
-        return previous
-    last = [k for k in reader.links if k.end <= before and k.reference is not None]
-    if last and last[-1].reference == previous and last[-1].relation not in STACKING:
+    related = {k.subject for k in reader.links} | {k.reference for k in reader.links
+                                                   if k.reference is not None}
+    if separator == ("with",) and previous in group and previous not in related:
         return previous
     return None
 
@@ -58,17 +53,22 @@ def resolve_references(reader: MatchReader) -> None:
     for n, link in enumerate(links):
         if link.kind not in ("pronoun", "bare"):
             continue
-        exclude = placed | {link.subject} | ({link.partner} if link.partner is not None
-                                             else set())
+        # Nor is what the subject is related to already: "a spoon on the napkin on the
+        # right" says nothing of the napkin against the spoon.
+        linked = {k.reference for k in links if k.subject == link.subject and k is not link} \
+            | {k.subject for k in links if k.reference == link.subject}
+        exclude = placed | linked | {link.subject} | (
+            {link.partner} if link.partner is not None else set())
         ref: int | None = None
         if link.kind == "pronoun":
             ref = antecedent(reader, link.start, exclude, link.subject)
         else:
             sentence = reader.sentence_at(link.start)
             later = [k.reference for k in links[n + 1:] if k.kind == "named"
-                     and reader.sentence_at(k.start) == sentence]
+                     and reader.sentence_at(k.start) == sentence
+                     and k.reference not in exclude]
             earlier = [k.reference for k in links[:n] if k.kind in ("named", "pronoun")
-                       and k.reference is not None and k.reference != link.subject]
+                       and k.reference is not None and k.reference not in exclude]
             ref = later[0] if later else earlier[-1] if earlier else \
                 antecedent(reader, link.start, exclude, link.subject)
         if ref is None or ref == link.subject:

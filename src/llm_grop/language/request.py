@@ -13,10 +13,15 @@ How the matcher reads (its vocabulary: :mod:`llm_grop.language.vocabulary`):
   name ("a glass of wine" is a wine glass).
 * Relation phrases between objects are stated relations ("a mug on a coaster", "the fork
   to the left of the plate", "the knife beside it", "the fork and knife either side of the
-  plate"), with a distance before them ("the fork 2 cm left of the plate"). "it" is the
-  object named last before the subject; "on its left" is "to the left of it". A phrase
-  without a reference ("on the left") relates to the reference stated nearby, else to the
-  object named last before its subject.
+  plate"), with a distance before them ("the fork 2 cm left of the plate"). "On its left"
+  is "to the left of it", and "it" must stand for one object: the only one named before
+  in its sentence, or the one a "with" introduced the subject by ("a bread plate with
+  bread on it"; :mod:`llm_grop.language.references`). A phrase without a reference ("on
+  the left") relates to the reference stated nearby, else to that one object.
+* Whatever could be read two ways is left to the LLM: a relation after a list ("a fork
+  and a spoon to the left of the plate": both?), a plural without a number, "it" that
+  could stand for two objects, a name repeated without "the" or "another", counts for
+  several diners ("two plates for two people"), a negation ("without a fork").
 * Diners: "for two", "for 4 people", "three place settings": the objects named are then
   one diner's setting.
 
@@ -49,6 +54,8 @@ from llm_grop.world.request import (
 )
 
 _SURROGATE = re.compile("[\ud800-\udfff]")
+#: Phrases that give one diner something, which a request for several leaves open.
+_ONE_DINER = re.compile(r"\bfor\s+(?:one|me|myself|him|her|one person|the host)\b")
 EXAMPLE = "e.g. 'a dinner plate, a dinner fork and a dinner knife'"
 
 
@@ -133,6 +140,8 @@ def read_request(text: str, catalog: Catalog) -> FastReading:
     diners, rest = diner_count(normalized(text))
     reader = read_words(rest, catalog, diners)
     doubts = list(reader.doubts)
+    if diners > 1 and _ONE_DINER.search(rest.lower()):
+        doubts.append(f"{diners} diners, and something for one of them")
     mentions = [(k, p) for k, p in enumerate(reader.parts) if isinstance(p, Mention)]
     named: dict[str, list[int]] = {}
     for _, m in mentions:

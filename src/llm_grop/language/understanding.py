@@ -24,17 +24,14 @@ word, else the configured LLM reads the whole request.
 from __future__ import annotations
 
 import difflib
-import functools
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from importlib import resources
-
-import yaml
 
 from llm_grop import seeds
 from llm_grop.errors import BadInput
 from llm_grop.language.llm_reading import (
+    NothingRead,
     read_reading_answer,
     reading_grammar,
     reading_prompt,
@@ -43,7 +40,7 @@ from llm_grop.language.llm_reading import (
 from llm_grop.language.parts import Unread
 from llm_grop.language.reading import Reading, ReadObject, to_request
 from llm_grop.language.request import EXAMPLE, FastReading, read_request
-from llm_grop.language.vocabulary import ARTICLES, request_words
+from llm_grop.language.vocabulary import ARTICLES, dining_words, request_words
 from llm_grop.language.words import normalized, tokens
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.world.catalog import Catalog, singular_forms
@@ -53,14 +50,6 @@ from llm_grop.world.request import Request
 _WORD = re.compile(r"[^\W\d_]+")
 #: A misspelt name is at least this close to a catalog name (difflib's ratio).
 TYPO_RATIO = 0.75
-
-
-@functools.cache
-def dining_words() -> frozenset[str]:
-    """The words of ``dining_words.yaml``."""
-    text = resources.files("llm_grop.language").joinpath("dining_words.yaml").read_text(
-        "utf-8")
-    return frozenset(str(w).lower() for w in yaml.safe_load(text)["words"])
 
 
 def _catalog_words(catalog: Catalog) -> frozenset[str]:
@@ -74,7 +63,7 @@ def _catalog_words(catalog: Catalog) -> frozenset[str]:
 
 def may_name_tableware(text: str, catalog: Catalog) -> bool:
     """Whether a word of ``text`` may stand for tableware (see the module docstring)."""
-    known = dining_words() | _catalog_words(catalog)
+    known = dining_words().every | _catalog_words(catalog)
     return any(form in known for word in _WORD.findall(normalized(text).lower())
                for form in singular_forms(word))
 
@@ -99,25 +88,35 @@ def mark_guesses(reading: Reading, fast: FastReading, catalog: Catalog) -> Readi
     names it (or misspells it) and gives its number, ``"llm"`` when the LLM chose it or how
     many."""
     typos = misspelt(fast.unread, catalog)
+    read: dict[str, int] = {}
+    for o in reading.objects:
+        read[o.name] = read.get(o.name, 0) + o.count
     objects = []
     for o in reading.objects:
         counts = fast.named.get(o.name)
-        named = (counts is not None and all(counts)) or (counts is None and o.name in typos)
+        # The request's own number must agree with the LLM's ("a plate" is not 4 plates).
+        # ("two plates ... for two people" is one plate each.)
+        named = (counts is not None and all(counts) and (
+            read[o.name] in (sum(counts), max(counts))
+            or read[o.name] * reading.diners == sum(counts))) or (
+            counts is None and o.name in typos)
         objects.append(replace(o, source="request" if named else "llm"))
     return replace(reading, objects=tuple(objects))
 
 
 def keep_stated(reading: Reading, text: str) -> tuple[Reading, list[str]]:
-    """``reading`` without the relations the request does not state, and a warning for
-    each: a relation's quoted words must all be words of ``text``, and one without words
-    must relate objects the request names (a weak model copies relations from elsewhere)."""
-    said = {t.word for t in tokens(text)}
+    """``reading`` without the relations the request does not state, and one warning that
+    lists them: a relation's quoted words must be words of ``text`` in the order written
+    there, and one without words must relate objects the request names (a weak model
+    copies relations from elsewhere)."""
+    said = [t.word for t in tokens(text)]
     named = {o.name for o in reading.objects if o.source == "request"}
     kept, ignored = [], []
     for r in reading.relations:
         quoted = [t.word for t in tokens(r.words) if t.word not in (",", ".", "-")]
         objects = [n for n in (r.subject, r.reference, r.partner) if n is not None]
-        if quoted and all(w in said for w in quoted) or not quoted and all(
+        rest = iter(said)
+        if quoted and all(w in rest for w in quoted) or not quoted and all(
                 re.sub(r" [0-9]+$", "", n) in named for n in objects):
             kept.append(r)
         else:
@@ -131,7 +130,7 @@ def guess_warning(objects: Sequence[ReadObject], backend: str) -> str:
     """The one warning line that lists what the LLM chose."""
     chosen = ", ".join(f"{o.count} {o.name}" + (f" (for {o.words!r})" if o.words else "")
                        for o in objects)
-    return (f"the {backend} LLM chose what the request does not name: {chosen}; "
+    return (f"the {backend} LLM chose what the request does not say: {chosen}; "
             "--no-guess refuses this")
 
 
@@ -160,19 +159,25 @@ def read_with_llm(fast: FastReading, catalog: Catalog, log: CallLog, seed: int =
                           reading_grammar(catalog), schema=reading_schema(catalog))
     try:
         reading, dropped = read_reading_answer(record.response, fast.text, catalog, where)
-    except BadInput as exc:
-        if "no object named" not in str(exc):
-            raise
-        raise BadInput(f"request: nothing in {fast.text!r} names tableware, and the "
-                       f"{log.backend} LLM read no object in it either; name the objects "
-                       f"to set, {EXAMPLE}") from None
-    if fast.diners > 1 and reading.diners == 1:
-        # The request's own diner phrase ("for two") wins over an answer that left it out.
+    except NothingRead:
+        raise BadInput(f"request: the {log.backend} LLM read no object in {fast.text!r}; "
+                       f"name the objects to set, {EXAMPLE}") from None
+    warnings = list(dropped)
+    if fast.diners > 1 and reading.diners != fast.diners:
+        # The request's own diner phrase ("for two") wins over the LLM's number.
+        if reading.diners != 1:
+            warnings.append(f"the request sets the table for {fast.diners}; the "
+                            f"{log.backend} LLM read {reading.diners} diners")
         reading = replace(reading, diners=fast.diners)
     reading = mark_guesses(reading, fast, catalog)
-    reading, warnings = keep_stated(reading, fast.text)
-    warnings = dropped + warnings
-    left_out = [kind for kind in fast.named if kind not in {o.name for o in reading.objects}]
+    reading, unstated = keep_stated(reading, fast.text)
+    warnings += unstated
+    kinds = list(dict.fromkeys(o.name for o in reading.objects))
+    left_out = [kind for kind in fast.named if kind not in kinds]
+    if fast.named and len(left_out) == len(fast.named):
+        raise BadInput(f"request: the {log.backend} LLM's reading ({', '.join(kinds)}) leaves "
+                       f"out everything {fast.text!r} names ({', '.join(left_out)}); name "
+                       "the objects to set in other words, or use a stronger model")
     if left_out:
         warnings.append(f"the {log.backend} LLM's reading leaves out what the request names: "
                         f"{', '.join(left_out)}")
@@ -198,7 +203,7 @@ def understand(text: str, catalog: Catalog, llm: CallLog | Callable[[], CallLog]
     if llm is None or not (may_name_tableware(fast.text, catalog)
                            or misspelt(fast.unread, catalog)):
         raise fast.error()
-    if not guess and not fast.named:
+    if not guess and not fast.named and not misspelt(fast.unread, catalog):
         raise BadInput(f"request: nothing in {fast.text!r} names an object, and --no-guess "
                        f"forbids the LLM to choose them; name the objects to set, {EXAMPLE}")
     log = llm if isinstance(llm, CallLog) else llm()
@@ -207,9 +212,9 @@ def understand(text: str, catalog: Catalog, llm: CallLog | Callable[[], CallLog]
     if chosen and not guess:
         listed = ", ".join(f"{o.count} {o.name}" for o in chosen)
         raise BadInput(f"request: the {log.backend} LLM chose what {fast.text!r} does not "
-                       f"name ({listed}), and --no-guess forbids it; name the objects to set")
+                       f"say ({listed}), and --no-guess forbids it; name the objects to set")
     return to_request(read.reading, catalog, (read.record,), read.warnings)
 
 
-__all__ = ["LLMReading", "dining_words", "guess_warning", "keep_stated", "mark_guesses",
+__all__ = ["LLMReading", "guess_warning", "keep_stated", "mark_guesses",
            "may_name_tableware", "misspelt", "read_with_llm", "understand"]

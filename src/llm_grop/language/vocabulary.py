@@ -12,7 +12,6 @@ it is written.
 from __future__ import annotations
 
 import functools
-import re
 from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
@@ -32,16 +31,43 @@ READING_RELATIONS: tuple[str, ...] = (*RELATION_NAMES, BESIDE, EITHER_SIDE)
 
 ARTICLES = frozenset({"a", "an", "the"})
 
-#: "to its left", "on its upper right-hand side": said of "it" (the words before).
-_ITS = re.compile(r"\b(?:to|on|at|towards)\s+(?:the\s+)?its\s+(left|right|upper left|upper right|"
-                  r"lower left|lower right|top left|top right|bottom left|bottom right)"
-                  r"(?:[\s-]+hand)?(?:\s+side)?\b")
+#: Directions said of "its" ("to its upper left"), as words.
+_ITS_DIRECTIONS = frozenset({("left",), ("right",), ("upper", "left"), ("upper", "right"),
+                             ("lower", "left"), ("lower", "right"), ("top", "left"),
+                             ("top", "right"), ("bottom", "left"), ("bottom", "right")})
 
 
-def expand_its(text: str) -> str:
-    """``text`` (lower case) with "to its left" written "to the left of it", so that the
-    pronoun is read as a reference like any other."""
-    return _ITS.sub(lambda m: f"to the {m.group(1)} of it", text)
+def its_at(words: Sequence[str], i: int) -> tuple[int, tuple[str, ...]] | None:
+    """"on its left (hand side)" at ``words[i]`` as ``(end, words to read instead)``: "to the
+    left of it", so that the pronoun is read as a reference like any other; else ``None``."""
+    if words[i] not in ("to", "on", "at", "towards"):
+        return None
+    j = i + 1 + (i + 1 < len(words) and words[i + 1] == "the")
+    if j >= len(words) or words[j] != "its":
+        return None
+    for n in (2, 1):
+        direction = tuple(words[j + 1:j + 1 + n])
+        if len(direction) == n and direction in _ITS_DIRECTIONS:
+            end = j + 1 + n
+            while end < len(words) and words[end] in ("hand", "side"):
+                end += 1
+            return end, ("to", "the", *direction, "of", "it")
+    return None
+
+
+def expand_its(words: Sequence[str]) -> list[str]:
+    """``words`` with every :func:`its_at` phrase read as "to the left of it"."""
+    out: list[str] = []
+    i = 0
+    while i < len(words):
+        found = its_at(words, i)
+        if found is None:
+            out.append(words[i])
+            i += 1
+        else:
+            out += found[1]
+            i = found[0]
+    return out
 
 
 @dataclass(frozen=True)
@@ -178,6 +204,23 @@ def request_words() -> RequestWords:
                         max(len(p) for p in every))
 
 
+@dataclass(frozen=True)
+class DiningWords:
+    """The words of ``dining_words.yaml``: ``every`` one may stand for tableware;
+    ``contents`` are what a container may hold."""
+
+    every: frozenset[str]
+    contents: frozenset[str]
+
+
+@functools.cache
+def dining_words() -> DiningWords:
+    """The words of ``dining_words.yaml``."""
+    data = _asset("dining_words.yaml")
+    every = frozenset(str(w).lower() for words in data.values() for w in words)
+    return DiningWords(every, frozenset(str(w).lower() for w in data["contents"]))
+
+
 def longest_at(words: Sequence[str], i: int, phrases: Collection[tuple[str, ...]],
                limit: int) -> int:
     """Length of the longest phrase of ``phrases`` (each at most ``limit`` words) that starts
@@ -188,6 +231,7 @@ def longest_at(words: Sequence[str], i: int, phrases: Collection[tuple[str, ...]
     return 0
 
 
-__all__ = ["ARTICLES", "BESIDE", "EITHER_SIDE", "READING_RELATIONS", "PhraseMatch",
-           "PhraseTable", "RequestWords", "beside", "either_side", "expand_its", "longest_at",
-           "phrase_table", "request_words"]
+__all__ = ["ARTICLES", "BESIDE", "EITHER_SIDE", "READING_RELATIONS", "DiningWords",
+           "PhraseMatch",
+           "PhraseTable", "RequestWords", "beside", "dining_words", "either_side",
+           "expand_its", "longest_at", "phrase_table", "request_words"]

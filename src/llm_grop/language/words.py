@@ -10,21 +10,13 @@ import unicodedata
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from llm_grop.language.vocabulary import request_words
+from llm_grop.language.distance import unit_cm
+from llm_grop.language.vocabulary import its_at, request_words
 
 #: A word, or a number with its decimals: "2.5 cm" is one number and a unit.
 _TOKEN = re.compile(r"[0-9]+(?:\.[0-9]+)?|[^\W\d_]+(?:'[^\W\d_]+)*")
 #: Characters that end a sentence (other separators only separate objects).
 _SENTENCE_END = frozenset(".!?\n")
-#: Centimetres per unit of a stated distance.
-UNIT_CM: dict[str, float] = {
-    **dict.fromkeys(("cm", "cms", "centimetre", "centimetres", "centimeter", "centimeters"),
-                    1.0),
-    **dict.fromkeys(("mm", "millimetre", "millimetres", "millimeter", "millimeters"), 0.1),
-    **dict.fromkeys(("m", "metre", "metres", "meter", "meters"), 100.0),
-    **dict.fromkeys(("inch", "inches"), 2.54),
-    **dict.fromkeys(("foot", "feet", "ft"), 30.48),
-}
 
 
 @dataclass(frozen=True)
@@ -75,35 +67,22 @@ def tokens(text: str) -> list[Token]:
     return _expand_its(out)
 
 
-_ITS_DIRECTIONS = {("left",), ("right",), ("upper", "left"), ("upper", "right"),
-                   ("lower", "left"), ("lower", "right"), ("top", "left"), ("top", "right"),
-                   ("bottom", "left"), ("bottom", "right")}
-
-
 def _expand_its(toks: list[Token]) -> list[Token]:
-    """"on its left (hand side)" as "to the left of it": the pronoun becomes a reference."""
+    """Tokens with "on its left (hand side)" read as "to the left of it"
+    (:func:`~llm_grop.language.vocabulary.its_at`), spanning the words they replace."""
+    words = [t.word for t in toks]
     out: list[Token] = []
     i = 0
     while i < len(toks):
-        w = toks[i].word
-        j = i + 1 + (i + 1 < len(toks) and toks[i + 1].word == "the")
-        if w in ("to", "on", "at", "towards") and j < len(toks) and toks[j].word == "its":
-            for n in (2, 1):
-                words = tuple(t.word for t in toks[j + 1:j + 1 + n])
-                if len(words) == n and words in _ITS_DIRECTIONS:
-                    end = j + 1 + n
-                    while end < len(toks) and toks[end].word in ("hand", "side"):
-                        end += 1
-                    span = toks[i].start, toks[end - 1].end
-                    out += [Token(x, *span) for x in ("to", *words, "of", "it")]
-                    i = end
-                    break
-            else:
-                out.append(toks[i])
-                i += 1
+        found = its_at(words, i)
+        if found is None:
+            out.append(toks[i])
+            i += 1
             continue
-        out.append(toks[i])
-        i += 1
+        end, instead = found
+        span = toks[i].start, toks[end - 1].end
+        out += [Token(x, *span) for x in instead]
+        i = end
     return out
 
 
@@ -126,6 +105,7 @@ def distance_at(words: Sequence[str], i: int, numbers: Mapping[str, int]
         value, j = 1.0, j + 1
     if value is not None and words[j:j + 3] == ["and", "a", "half"]:
         value, j = value + 0.5, j + 3
-    if value is None or j >= len(words) or words[j] not in UNIT_CM:
+    per_unit = unit_cm(words[j]) if value is not None and j < len(words) else None
+    if per_unit is None:
         return None
-    return sign * value * UNIT_CM[words[j]], j + 1
+    return sign * (value or 0.0) * per_unit, j + 1

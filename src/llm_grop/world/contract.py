@@ -161,8 +161,9 @@ class ArrangementDoc(Doc):
     conflicts: list[list[RelationDoc]] = Field(
         [], description="per rejected LLM answer, the minimal set of conflicting lines")
     request_read_by: Literal["catalog", "llm"] | None = Field(
-        None, description="how the request was read: by the catalog matcher alone, or by an "
-                          "LLM that read the whole request")
+        None, description="how the request was read: by the catalog matcher alone (also "
+                          "for the paper's tasks, whose objects are listed), or by an LLM "
+                          "that read the whole request")
 
 
 class StepDoc(Doc):
