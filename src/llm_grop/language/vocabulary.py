@@ -55,19 +55,22 @@ def its_at(words: Sequence[str], i: int) -> tuple[int, tuple[str, ...]] | None:
     return None
 
 
-def expand_its(words: Sequence[str]) -> list[str]:
-    """``words`` with every :func:`its_at` phrase read as "to the left of it"."""
-    out: list[str] = []
+def its_segments(words: Sequence[str]) -> list[tuple[int, int, tuple[str, ...]]]:
+    """``words`` cut into ``(start, end, words to read)``: each word as itself, and each
+    :func:`its_at` phrase as "to the left of it"."""
+    out: list[tuple[int, int, tuple[str, ...]]] = []
     i = 0
     while i < len(words):
         found = its_at(words, i)
-        if found is None:
-            out.append(words[i])
-            i += 1
-        else:
-            out += found[1]
-            i = found[0]
+        end, instead = found if found is not None else (i + 1, (words[i],))
+        out.append((i, end, instead))
+        i = end
     return out
+
+
+def expand_its(words: Sequence[str]) -> list[str]:
+    """``words`` with every :func:`its_at` phrase read as "to the left of it"."""
+    return [w for _, _, instead in its_segments(words) for w in instead]
 
 
 @dataclass(frozen=True)
@@ -232,6 +235,7 @@ def longest_at(words: Sequence[str], i: int, phrases: Collection[tuple[str, ...]
 
 
 __all__ = ["ARTICLES", "BESIDE", "EITHER_SIDE", "READING_RELATIONS", "DiningWords",
+           "its_at", "its_segments",
            "PhraseMatch",
            "PhraseTable", "RequestWords", "beside", "dining_words", "either_side",
            "expand_its", "longest_at", "phrase_table", "request_words"]

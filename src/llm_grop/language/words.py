@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from llm_grop.language.distance import unit_cm
-from llm_grop.language.vocabulary import its_at, request_words
+from llm_grop.language.vocabulary import its_segments, request_words
 
 #: A word, or a number with its decimals: "2.5 cm" is one number and a unit.
 _TOKEN = re.compile(r"[0-9]+(?:\.[0-9]+)?|[^\W\d_]+(?:'[^\W\d_]+)*")
@@ -69,20 +69,13 @@ def tokens(text: str) -> list[Token]:
 
 def _expand_its(toks: list[Token]) -> list[Token]:
     """Tokens with "on its left (hand side)" read as "to the left of it"
-    (:func:`~llm_grop.language.vocabulary.its_at`), spanning the words they replace."""
-    words = [t.word for t in toks]
+    (:func:`~llm_grop.language.vocabulary.its_segments`), spanning the words they replace."""
     out: list[Token] = []
-    i = 0
-    while i < len(toks):
-        found = its_at(words, i)
-        if found is None:
-            out.append(toks[i])
-            i += 1
-            continue
-        end, instead = found
-        span = toks[i].start, toks[end - 1].end
-        out += [Token(x, *span) for x in instead]
-        i = end
+    for start, end, instead in its_segments([t.word for t in toks]):
+        if end == start + 1 and instead == (toks[start].word,):
+            out.append(toks[start])
+        else:
+            out += [Token(w, toks[start].start, toks[end - 1].end) for w in instead]
     return out
 
 
