@@ -33,6 +33,7 @@ chunk it could not read (:meth:`FastReading.error`).
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -66,11 +67,10 @@ class FastReading:
     ``reading`` is its reading when it accounts for every word, else ``None``; then
     ``unread`` holds the chunks it could not read and ``doubts`` what it could not
     resolve. ``named`` maps each catalog kind the request names to the counts it gives
-    (0: no number, "some strawberries"). ``rest`` is the text without its diner phrase.
+    (0: no number, "some strawberries").
     """
 
     text: str
-    rest: str
     diners: int
     reading: Reading | None
     unread: tuple[Unread, ...] = ()
@@ -104,6 +104,7 @@ def check_text(text: str) -> None:
                        "write the request in UTF-8")
 
 
+@functools.cache
 def _diner_patterns() -> tuple[re.Pattern[str], ...]:
     number = r"([0-9]+|" + "|".join(request_words().numbers) + ")"
     people = r"(?:\s+(?:people|persons|diners|guests|adults|of\s+us|others))?"
@@ -147,7 +148,7 @@ def read_request(text: str, catalog: Catalog) -> FastReading:
     for _, m in mentions:
         named.setdefault(m.spec.name, []).append(m.count or 0)
     unread = tuple(p for p in reader.parts if isinstance(p, Unread))
-    base = FastReading(" ".join(text.split()), rest, diners, None, unread, (),
+    base = FastReading(" ".join(text.split()), diners, None, unread, (),
                        {k: tuple(v) for k, v in named.items()})
     if not mentions and not unread and not doubts:
         doubts.append(f"no object named in {base.text!r}; name the objects to set, "

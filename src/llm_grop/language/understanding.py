@@ -200,10 +200,10 @@ def understand(text: str, catalog: Catalog, llm: CallLog | Callable[[], CallLog]
     fast = read_request(text, catalog)
     if fast.reading is not None:
         return to_request(fast.reading, catalog)
-    if llm is None or not (may_name_tableware(fast.text, catalog)
-                           or misspelt(fast.unread, catalog)):
+    typos = misspelt(fast.unread, catalog) if llm is not None else frozenset()
+    if llm is None or not (may_name_tableware(fast.text, catalog) or typos):
         raise fast.error()
-    if not guess and not fast.named and not misspelt(fast.unread, catalog):
+    if not guess and not fast.named and not typos:
         raise BadInput(f"request: nothing in {fast.text!r} names an object, and --no-guess "
                        f"forbids the LLM to choose them; name the objects to set, {EXAMPLE}")
     log = llm if isinstance(llm, CallLog) else llm()
