@@ -1,9 +1,13 @@
-"""Small hand-built dining rooms shared by the planning, simulation and method tests."""
+"""Small hand-built dining rooms shared by the planning, simulation and method tests, and
+a constant true success model for simulators."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.geometry2d import Box, Pose2D
+from llm_grop.world.robot import Robot
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
 
 
@@ -32,3 +36,17 @@ def placement(name: str, x: float, y: float, shape: str = "circle",
 def config(*placements: Placement) -> Configuration:
     """A configuration from placements."""
     return Configuration(tuple(placements))
+
+
+@dataclass(frozen=True)
+class Constant:
+    """A true success model with fixed probabilities (within reach)."""
+
+    nav: float
+    manip: float
+
+    def navigation(self, clearance_m: float) -> float:
+        return self.nav if clearance_m >= 0 else 0.0
+
+    def manipulation(self, reach_m: float, robot: Robot) -> float:
+        return self.manip if robot.reach_min_m <= reach_m <= robot.reach_max_m else 0.0

@@ -12,6 +12,7 @@ from llm_grop.arrangement.diners import seat_items, seat_table
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
 from llm_grop.arrangement.stated import check_stated
 from llm_grop.errors import BadInput
+from llm_grop.execution import ExecutionPolicy
 from llm_grop.language import understanding
 from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
 from llm_grop.llm.cache import LLMCache
@@ -123,7 +124,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         simulator: str | Simulator = DEFAULT_SIMULATOR, planner: GropOptions | None = None,
         feasibility: str = "default",
         tasks: Mapping[int, Task] | None = None,
-        on_event: Callable[[str], None] | None = None, guess: bool = True) -> RunResult:
+        on_event: Callable[[str], None] | None = None, guess: bool = True,
+        execution: ExecutionPolicy | None = None) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
 
     ``scene`` is a :class:`Scene`, a scene YAML file, or ``None`` for the packaged dining
@@ -138,7 +140,9 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     is the same whichever executes it); ``feasibility`` names the planner's belief of how
     often actions succeed (``default``, or ``mujoco`` as fitted in 3D); ``tasks``
     replaces the paper's Table I for ``task``; ``guess=False`` refuses a request whose
-    reading needs the LLM to choose objects. The same seed gives the same run.
+    reading needs the LLM to choose objects; ``execution`` sets the executive's attempt
+    counts and place tolerances (default: the authors' counts, 20 manipulation attempts
+    for LLM-GROP and 10 for the baselines). The same seed gives the same run.
     """
     # Planning pulls in OMPL and scipy; import them only when a run needs them.
     from llm_grop.methods.base import EpisodeInput
@@ -183,4 +187,4 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     inp = EpisodeInput(reading.text, items, top, seed, catalog,
                        log() if chosen.uses_llm else None, options, on_event, reading)
     return run_episode(chosen, inp, episode, task=task, simulator=sim, planner=planner,
-                       model=feasibility)
+                       model=feasibility, policy=execution)

@@ -131,8 +131,8 @@ def test_stacking_through_the_environment() -> None:
                 break
         assert info["ok"], info
     assert env.session is not None
-    final = {p.name: p for p in env.session.final()}
-    assert final["bread"].on == "bread plate"
+    states = env.session.objects()
+    assert states["bread"].on == "bread plate" and states["bread"].tilt_rad == 0.0
 
 
 def test_actions_outside_the_space_are_refused() -> None:

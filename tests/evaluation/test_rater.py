@@ -285,3 +285,31 @@ def test_conventions_name_only_catalog_kinds(catalog: Catalog) -> None:
     kinds |= set(conv.supports) | {k for ks in conv.supports.values() for k in ks}
     kinds |= {k for gs in conv.expected_stacks.values() for g in gs for k in g}
     assert kinds <= set(catalog.names())
+
+
+def test_a_tipped_object_counts_as_not_placed(catalog: Catalog) -> None:
+    doc = load("08_task8_perfect.json")
+    assert rate(doc, catalog=catalog).score == 5
+    doc["objects"][3] |= {"tilt_rad": 1.5708, "z_m": 0.0}  # the mug on its side
+    r = rate(doc, catalog=catalog)
+    assert r.score == 1
+    assert any(c.name == "upright" and "mug lies tipped over" in c.detail for c in r.failed)
+    assert any(c.name == "all items present" and "mug missing" in c.detail for c in r.failed)
+    doc["objects"][3]["tilt_rad"] = 0.2  # leaning a little still stands
+    assert rate(doc, catalog=catalog).score == 5
+
+
+def test_a_fork_on_its_napkin_is_a_common_setting(catalog: Catalog) -> None:
+    doc = {"request": "set the table with a dinner plate, a dinner fork and a napkin",
+           "table": {"shape": "rectangle", "size": [0.9, 0.6]},
+           "objects": [
+               {"name": "dinner plate", "x": 0.0, "y": -0.13},
+               {"name": "napkin", "x": -0.2, "y": -0.175},
+               {"name": "dinner fork", "x": -0.2, "y": -0.175, "on": "napkin"}]}
+    r = rate(doc, catalog=catalog)
+    assert r.score == 5, r.summary
+    # It is still a fork at its side: on the napkin right of the plate, it is on the
+    # wrong side.
+    for o in doc["objects"][1:]:
+        o["x"] = 0.2
+    assert "cutlery sides" in failed_names(rate(doc, catalog=catalog))

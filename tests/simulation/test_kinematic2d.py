@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pytest
 
+from llm_grop.execution import ExecutionPolicy, execute
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
@@ -15,38 +16,34 @@ from llm_grop.simulation.kinematic2d import Kinematic2D, Kinematic2DOptions
 from llm_grop.simulation.registry import available_simulators, create_simulator
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box
+from llm_grop.world.plan import Execution, Plan
 from llm_grop.world.request import items_from_names
 from llm_grop.world.robot import Robot
-from llm_grop.world.scene import Chair
-from scenes import config, placement, two_table_room
+from llm_grop.world.scene import Chair, ObjectSource, Scene
+from scenes import Constant, config, placement, two_table_room
 
 NAMES = ["dinner plate", "bread", "dinner fork"]
+ITEMS = items_from_names(NAMES, Catalog.load())
 
 
-@dataclass(frozen=True)
-class Constant:
-    """A true success model with fixed probabilities (within reach)."""
-
-    nav: float
-    manip: float
-
-    def navigation(self, clearance_m: float) -> float:
-        return self.nav if clearance_m >= 0 else 0.0
-
-    def manipulation(self, reach_m: float, robot: Robot) -> float:
-        return self.manip if robot.reach_min_m <= reach_m <= robot.reach_max_m else 0.0
 
 
-def sim(nav: float | None = None, manip: float | None = None, **options: int) -> Kinematic2D:
+def sim(nav: float | None = None, manip: float | None = None, **options: Any) -> Kinematic2D:
     """The simulator, with a constant truth when ``nav`` and ``manip`` are given."""
     truth = {} if nav is None else {"outcomes": Constant(nav, manip or 0.0)}
     return Kinematic2D(Kinematic2DOptions(**truth, **options))
 
 
+def run(simulator: Kinematic2D, plan: Plan, scene: Scene, seed: int, nav: Navigator,
+        **policy: Any) -> Execution:
+    """``plan`` executed by the executive on ``simulator``."""
+    return execute(simulator, plan, scene, ITEMS, np.random.default_rng(seed), replan=nav,
+                   policy=ExecutionPolicy(**policy))
+
+
 def _setup(chairs: tuple[Chair, ...] = ()):  # type: ignore[no-untyped-def]
     scene = two_table_room(chairs=chairs)
-    items = items_from_names(NAMES, Catalog.load())
-    ctx = PlanningContext(scene, items)
+    ctx = PlanningContext(scene, ITEMS)
     cfg = config(placement("dinner plate", 0.0, -0.05),
                  placement("bread", 0.0, -0.05, "box", (0.1, 0.08), on="dinner plate"),
                  placement("dinner fork", -0.22, -0.05, "box", (0.025, 0.2)))
@@ -62,13 +59,13 @@ def test_registry_has_kinematic2d() -> None:
 
 def test_same_seed_same_execution() -> None:
     scene, plan, nav = _setup()
-    runs = [sim().execute(plan, scene, np.random.default_rng(7), replan=nav) for _ in range(2)]
+    runs = [run(sim(), plan, scene, 7, nav) for _ in range(2)]
     assert runs[0] == runs[1]
 
 
 def test_certain_success_places_everything_near_its_target() -> None:
     scene, plan, nav = _setup()
-    ex = sim(1.0, 1.0).execute(plan, scene, np.random.default_rng(0), replan=nav)
+    ex = run(sim(1.0, 1.0), plan, scene, 0, nav)
     assert ex.success and ex.failures == 0
     targets = {p.name: p for p in plan.configuration}
     for p in ex.final:
@@ -80,33 +77,41 @@ def test_certain_success_places_everything_near_its_target() -> None:
 
 def test_impossible_manipulation_is_retried_then_abandoned() -> None:
     scene, plan, nav = _setup()
-    ex = sim(1.0, 0.0, manip_attempts=4).execute(plan, scene, np.random.default_rng(0),
-                                                 replan=nav)
+    ex = run(sim(1.0, 0.0), plan, scene, 0, nav, manip_attempts=4)
     assert not ex.success and ex.final == ()
     assert set(ex.unplaced) == set(NAMES)
+    assert dict(ex.unplaced_reasons) == dict.fromkeys(NAMES, "grasp_missed")
     picks = [s for s in ex.steps if s.action == "pick"]
     assert len(picks) == 4 * len(NAMES) and not any(s.ok for s in picks)
+    assert {s.reason for s in picks} == {"grasp_missed"}
 
 
 def test_failed_navigation_retries_then_falls_back() -> None:
     scene, plan, nav = _setup()
-    ex = sim(0.0, 1.0).execute(plan, scene, np.random.default_rng(0), replan=nav)
+    ex = run(sim(0.0, 1.0), plan, scene, 0, nav)
     navs = [s for s in ex.steps if s.action == "navigate"]
     assert navs and not any(s.ok for s in navs)
     # 3 attempts at the first pickup goal, then the object is given up.
     assert [s.attempt for s in navs[:3]] == [1, 2, 3]
+    assert {s.reason for s in navs} == {"contact"}
     assert not ex.success
 
 
 def test_support_that_never_arrives_leaves_its_load_on_the_table() -> None:
     scene, plan, nav = _setup()
-    # The plate cannot be picked: its start is moved far out of reach.
-    steps = tuple(s if not (s.action == "pick" and s.object == "dinner plate")
-                  else type(s)(**{**s.__dict__, "pose": (5.9, 3.9, 0.0)}) for s in plan.steps)
-    plan = type(plan)(**{**plan.__dict__, "steps": steps})
-    ex = sim(1.0, 1.0).execute(plan, scene, np.random.default_rng(0), replan=nav)
-    assert "dinner plate" in ex.unplaced
+    # The plate really lies in the counter's far corner, out of the arm's reach from where
+    # the plan has the robot stand to pick it.
+    real = scene.with_sources(tuple(ObjectSource("dinner plate", "counter", 0.17, 1.42)
+                                    if s.object == "dinner plate" else s
+                                    for s in scene.sources))
+    ex = run(sim(1.0, 1.0), plan, real, 0, nav)
+    assert "dinner plate" in ex.unplaced and dict(ex.unplaced_reasons)["dinner plate"] == "no_ik"
+    picks = [s for s in ex.steps if s.action == "pick" and s.object == "dinner plate"]
+    assert len(picks) == 10 and {s.reason for s in picks} == {"no_ik"}
+    assert all(s.duration_s == scene.robot.ik_failure_s for s in picks)
+    # Its load goes on the table where the plate should be, but not on its support.
     assert {p.name: p.on for p in ex.final}.get("bread", "missing") is None
+    assert dict(ex.unplaced_reasons)["bread"] == "wrong_support"
 
 
 def test_robot_never_stands_inside_a_chair() -> None:
@@ -115,7 +120,7 @@ def test_robot_never_stands_inside_a_chair() -> None:
     obstacles = Obstacles(scene, include_chairs=True)
     r = scene.robot.base_radius_m
     for seed in range(10):
-        ex = sim().execute(plan, scene, np.random.default_rng(seed), replan=nav)
+        ex = run(sim(), plan, scene, seed, nav)
         for s in ex.steps:
             if s.standing is not None:
                 c = obstacles.clearance(np.array([[s.standing.x, s.standing.y]]))[0]

@@ -17,6 +17,7 @@ from llm_grop import seeds
 from llm_grop.api import run
 from llm_grop.cli import main
 from llm_grop.errors import BadInput
+from llm_grop.execution import execute
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import PlanningContext
@@ -25,7 +26,7 @@ from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.world.arrangement import Placement
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box
-from llm_grop.world.plan import Plan
+from llm_grop.world.plan import Execution, Plan
 from llm_grop.world.request import items_from_names
 from llm_grop.world.run_json import run_to_dict
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
@@ -42,6 +43,13 @@ def _plan(scene: Scene, *placements: Placement) -> tuple[Plan, Navigator]:
     nav = Navigator(scene, scene.robot.base_radius_m)
     return build_plan(ctx, choose(ctx, [config(*placements)]), nav, seed=0,
                       configurations=1), nav
+
+
+def _execute(plan: Plan, scene: Scene, seed: int, nav: Navigator) -> Execution:
+    """``plan`` run by the executive in MuJoCo without arrival noise."""
+    items = items_from_names(list(plan.order), Catalog.load())
+    return execute(MujocoSimulator(EXACT), plan, scene, items, seeds.stream(seed, "simulator"),
+                   replan=nav)
 
 
 #: Without the authors' arrival noise (0.03 m² per axis), which makes a lucky seed part of
@@ -76,7 +84,7 @@ def test_lid_settles_on_the_mug_and_bread_on_its_plate() -> None:
     plan, nav = _plan(scene, _item("mug", 0.2, 0.0), _item("mug lid", 0.2, 0.0, on="mug"),
                       _item("dinner plate", -0.15, 0.0),
                       _item("bread", -0.15, 0.0, on="dinner plate"))
-    ex = MujocoSimulator(EXACT).execute(plan, scene, seeds.stream(1, "simulator"), replan=nav)
+    ex = _execute(plan, scene, 1, nav)
     final = {p.name: p for p in ex.final}
     assert final["mug lid"].on == "mug"
     assert final["bread"].on == "dinner plate"
@@ -96,9 +104,9 @@ def test_a_chair_on_the_path_is_a_contact_a_failure_and_a_replan() -> None:
     chair = Chair("surprise", Box(mid[0], mid[1], 0.45, 0.45, heading))
     real = scene.with_chairs((chair,))
     nav = Navigator(real, real.robot.base_radius_m)
-    ex = MujocoSimulator(EXACT).execute(plan, real, seeds.stream(0, "simulator"), replan=nav)
+    ex = _execute(plan, real, 0, nav)
     first = ex.steps[0]
-    assert first.action == "navigate" and not first.ok
+    assert first.action == "navigate" and not first.ok and first.reason == "contact"
     assert "contact with chair 'surprise'" in first.note
     retry = ex.steps[1]
     assert retry.action == "navigate" and retry.ok and retry.attempt == 2

@@ -17,6 +17,7 @@ from llm_grop.cli.options import (
     FIDELITY_WEIGHT,
     SIMULATOR,
     TABLE,
+    attempt_flags,
     check_out_dir,
     execution_flags,
     execution_settings,
@@ -127,6 +128,7 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
               type=click.Path(dir_okay=False, path_type=Path),
               help="Extra tasks (YAML, like the packaged tasks.yaml); repeatable.")
 @click.option("--no-images", is_flag=True, help="Do not draw each trial's final table.")
+@attempt_flags
 @llm_flags_without_record
 @execution_flags
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
@@ -164,7 +166,8 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
                        table: Table | None, simulator: str, feasibility: str, w: float,
                        fidelity_w: float, task_files: tuple[Path, ...], no_images: bool,
                        catalog_files: tuple[Path, ...], threads: int | None,
-                       cache: str | None, **flags: Any) -> Experiment:
+                       cache: str | None, nav_attempts: int = 3,
+                       manip_attempts: int | None = None, **flags: Any) -> Experiment:
     """The experiment ``bench``'s flags describe, every input checked (unknown components,
     tasks, objects and preferences, the output directory) before any trial runs.
 
@@ -219,7 +222,7 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
         fidelity_w_s_per_cm=fidelity_w,
         task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
         images=None if no_images else str(out_dir / "images"), simulator=sim.name,
-        feasibility=feasibility)
+        feasibility=feasibility, nav_attempts=nav_attempts, manip_attempts=manip_attempts)
     return Experiment(tasks, trials, methods, settings, seed)
 
 

@@ -104,6 +104,7 @@ def print_run(result: RunResult, console: Console, err: Console | None = None) -
     table = RichTable(title="Execution", title_justify="left")
     for col in ("#", "object", "standing (x, y, θ)", "navigate", "pick", "place", "placed"):
         table.add_column(col)
+    reasons = dict(ex.unplaced_reasons)
     for k, name in enumerate(plan.order, 1):
         steps = [s for s in ex.steps if s.object == name]
         place = [s for s in steps if s.action == "place"]
@@ -113,7 +114,8 @@ def print_run(result: RunResult, console: Console, err: Console | None = None) -
             f"{stand.x:.2f}, {stand.y:.2f}, {stand.theta:+.2f}" if stand else "-",
             *(_attempts([s for s in steps if s.action == a]) for a in ("navigate", "pick",
                                                                        "place")),
-            "[green]yes[/green]" if name not in ex.unplaced else "[red]no[/red]")
+            "[green]yes[/green]" if name not in ex.unplaced
+            else f"[red]no ({reasons.get(name, '?').replace('_', ' ')})[/red]")
     console.print(table)
     verdict = "[green]success[/green]" if ex.success else \
         f"[red]failed[/red] ({', '.join(ex.unplaced)} not placed)"
@@ -129,10 +131,13 @@ def print_run(result: RunResult, console: Console, err: Console | None = None) -
 
 
 def _attempts(steps: list[ExecutedStep]) -> str:
-    """``"ok"``, ``"ok after 2 failures"`` or ``"failed xN"``."""
+    """``"ok"``, ``"ok after 2 failures (slid, contact)"`` or ``"failed x3 (no IK)"``,
+    with the failures' reasons."""
     if not steps:
         return "-"
-    fails = sum(not s.ok for s in steps)
+    failed = [s for s in steps if not s.ok]
+    why = ", ".join(dict.fromkeys((s.reason or "refused").replace("_", " ") for s in failed))
     if steps[-1].ok:
-        return "ok" if not fails else f"ok after {fails} failure{'s' * (fails > 1)}"
-    return f"[red]failed x{fails}[/red]"
+        n = len(failed)
+        return "ok" if not n else f"ok after {n} failure{'s' * (n > 1)} ({why})"
+    return f"[red]failed x{len(failed)} ({why})[/red]"

@@ -241,6 +241,19 @@ SIMULATOR = click.option(
     help="The simulator that executes the plan (see `llm-grop plugins`).")
 
 
+def attempt_flags(f: F) -> F:
+    """Add the executive's attempt counts, ``--nav-attempts`` and ``--manip-attempts``."""
+    f = click.option(
+        "--manip-attempts", "manip_attempts", type=click.IntRange(1),
+        help="Attempts per pick and per place of each object, re-grasps included "
+             "[default: the method's: 20 for llm-grop, 10 for the others, as the authors "
+             "ran them].")(f)
+    return click.option(
+        "--nav-attempts", "nav_attempts", default=3, show_default=True,
+        type=click.IntRange(1),
+        help="Attempts per navigation goal before the next fallback standing position.")(f)
+
+
 NO_GUESS = click.option(
     "--no-guess", "no_guess", is_flag=True,
     help="Refuse a request the LLM would have to complete: objects it does not name "

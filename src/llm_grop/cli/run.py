@@ -16,6 +16,7 @@ from llm_grop.cli.options import (
     SIMULATOR,
     TABLE,
     StagedOutputs,
+    attempt_flags,
     check_outputs,
     check_request,
     llm_flags,
@@ -54,6 +55,7 @@ from llm_grop.world.table import Table
               help="3D simulators: write an offscreen render of the room and the robot.")
 @click.option("--video", "video_path", type=click.Path(dir_okay=False, path_type=Path),
               help="--simulator mujoco: write an MP4 video of the episode.")
+@attempt_flags
 @llm_flags
 @NO_GUESS
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
@@ -63,12 +65,14 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
         json_path: Path | None,
         image_path: Path | None, table_image: Path | None, room_image: Path | None,
         video_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
-        quiet: bool, no_guess: bool, **flags: Any) -> None:
+        quiet: bool, no_guess: bool, nav_attempts: int, manip_attempts: int | None,
+        **flags: Any) -> None:
     """Set the table in a simulated dining room: arrange, plan, execute (paper §III-C)."""
     from rich.console import Console
 
     from llm_grop.api import run as api_run
     from llm_grop.cli.console import print_run
+    from llm_grop.execution import ExecutionPolicy
     from llm_grop.planning.utility import GropOptions
     from llm_grop.world.jsonio import write_json
     from llm_grop.world.run_json import run_to_dict
@@ -94,7 +98,9 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
                              options=options, record=record_path,
                              planner=GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w),
                              simulator=sim, feasibility=feasibility,
-                             on_event=on_event, guess=not no_guess)
+                             on_event=on_event, guess=not no_guess,
+                             execution=ExecutionPolicy(nav_attempts=nav_attempts,
+                                                       manip_attempts=manip_attempts))
         outputs.write("json", json_path, lambda p: write_json(p, run_to_dict(result)))
         if image_path is not None:
             from llm_grop.render.room import draw_run

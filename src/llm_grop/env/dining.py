@@ -33,6 +33,8 @@ from gymnasium import spaces
 
 from llm_grop import seeds
 from llm_grop.errors import BadInput
+from llm_grop.execution import ExecutionPolicy
+from llm_grop.execution.judge import judged_place
 from llm_grop.planning.navigation import Navigator
 from llm_grop.render.room import room_image
 from llm_grop.simulation.base import Session, Simulator
@@ -63,6 +65,8 @@ class DiningRoomEnv(gymnasium.Env):
         image_size: ``(width, height)`` of the image and of ``render()``, pixels.
         max_steps: actions before the episode is truncated.
         render_mode: ``None`` or ``"rgb_array"``.
+        policy: the tolerances a place is judged by (the executive's): a place whose
+            object comes to rest tipped, off its support or away from the pose fails.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -71,7 +75,8 @@ class DiningRoomEnv(gymnasium.Env):
                  simulator: str | Simulator = "kinematic2d",
                  scene: Scene | str | None = None, chairs: int = 1, camera: bool = False,
                  image_size: tuple[int, int] = (160, 120), max_steps: int = 60,
-                 render_mode: str | None = None) -> None:
+                 render_mode: str | None = None, policy: ExecutionPolicy | None = None
+                 ) -> None:
         self.catalog = Catalog.load()
         names = list(objects) if objects is not None else list(load_tasks()[task].objects)
         self.items = items_from_names(names, self.catalog)
@@ -86,6 +91,7 @@ class DiningRoomEnv(gymnasium.Env):
         self.scene = scene if isinstance(scene, Scene) else load_scene(scene)
         self.chairs, self.camera, self.image_size = chairs, camera, image_size
         self.max_steps, self.render_mode = max_steps, render_mode
+        self.policy = policy or ExecutionPolicy()
         if hasattr(self.simulator, "check"):
             self.simulator.check(self.scene, self.items)
         n, w, d = len(self.items), self.scene.width, self.scene.depth
@@ -148,7 +154,8 @@ class DiningRoomEnv(gymnasium.Env):
         elif kind == PICK:
             done = self.session.pick(name)
         else:
-            done = self.session.place(name, x, y, theta, on)
+            done, _ = judged_place(self.session, self.episode_scene, name, x, y, theta, on,
+                                   self.policy)
         self._steps += 1
         now = self._resting()
         gained = len(now - self._on_table) - len(self._on_table - now)
@@ -172,20 +179,22 @@ class DiningRoomEnv(gymnasium.Env):
         assert self.session is not None and self.episode_scene is not None
         if hasattr(self.session, "picture"):
             return self.session.picture("room", self.image_size)  # type: ignore[no-any-return]
-        poses = self.session.object_poses()
+        states = self.session.objects()
         return room_image(self.episode_scene, self.session.robot_pose(),
-                          {n: (p[0], p[1]) for n, p in poses.items()}, self.image_size)
+                          {n: (s.x, s.y) for n, s in states.items()}, self.image_size)
 
     def _resting(self) -> set[str]:
-        assert self.session is not None
-        return {p.name for p in self.session.final()}
+        assert self.session is not None and self.episode_scene is not None
+        target = self.episode_scene.target
+        return {n for n, s in self.session.objects().items() if s.table == target and not s.held}
 
     def _observe(self) -> dict[str, Any]:
         assert self.session is not None and self.episode_scene is not None
         space = self.observation_space
-        poses = self.session.object_poses()
+        states = self.session.objects()
         r = self.session.robot_pose()
-        objects = np.array([poses[n] for n in self.names], np.float32)
+        objects = np.array([(states[n].x, states[n].y, states[n].z, states[n].yaw)
+                            for n in self.names], np.float32)
         objects[:, 3] = [_wrap(a) for a in objects[:, 3]]
         chairs = np.zeros((self.chairs, 5), np.float32)
         for k, c in enumerate(self.episode_scene.chairs[:self.chairs]):

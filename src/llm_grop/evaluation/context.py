@@ -96,14 +96,20 @@ def expected_hosts(s: Setting, o: Obj) -> tuple[int, list[Obj]] | None:
     return None
 
 
+def _on_napkin(s: Setting, o: Obj) -> bool:
+    """Whether ``o`` rests on a napkin (a fork on its napkin is still a fork at its side)."""
+    host = s.support[o.name]
+    return host is not None and s.conv.has_role(s.by_name(host).kind, "napkin")
+
+
 def make_context(s: Setting) -> Context:
     """The centre object and the cutlery of ``s``."""
     centre = find_centre(s)
     tol = s.conv.thresholds.parallel_tol_rad
     cutlery = []
     for o in s.objects:
-        if not s.on_table(o) or not any(s.conv.has_role(o.kind, r)
-                                        for r in ("fork", "knife", "spoon")):
+        if not (s.on_table(o) or _on_napkin(s, o)) or not any(
+                s.conv.has_role(o.kind, r) for r in ("fork", "knife", "spoon")):
             continue
         if expected_hosts(s, o) is not None:
             continue  # e.g. a butter knife with a bread plate present: judged by `stacking`

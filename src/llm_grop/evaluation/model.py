@@ -24,6 +24,7 @@ from shapely.geometry.base import BaseGeometry
 
 from llm_grop.errors import BadInput
 from llm_grop.evaluation.conventions import Conventions
+from llm_grop.world.arrangement import UPRIGHT_TILT_RAD
 from llm_grop.world.catalog import Catalog, normalize_name
 from llm_grop.world.contract import ArrangementDoc, ObjectDoc
 
@@ -67,6 +68,12 @@ class Obj:
     size: tuple[float, float]
     on: str | None
     footprint: BaseGeometry = field(compare=False, repr=False)
+    tilt_rad: float = 0.0
+
+    @property
+    def upright(self) -> bool:
+        """Whether it stands upright (an executed arrangement says how tilted it is)."""
+        return self.tilt_rad <= UPRIGHT_TILT_RAD
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -172,7 +179,7 @@ def _read_object(i: int, o: ObjectDoc, where: str, catalog: Catalog) -> Obj:
     if shape == "circle" and abs(size[0] - size[1]) > 1e-6:
         raise BadInput(f"{at}.size: a circle needs [d, d], got {list(size)!r}")
     return Obj(o.name, kind, o.x, o.y, o.yaw, shape, size, o.on,
-               footprint(o.x, o.y, o.yaw, shape, size))
+               footprint(o.x, o.y, o.yaw, shape, size), o.tilt_rad or 0.0)
 
 
 def _rests_on(name: str, other: str, support: Mapping[str, str | None]) -> bool:

@@ -38,6 +38,7 @@ from llm_grop.evaluation.cutlery import (
     utensil_spacing,
 )
 from llm_grop.evaluation.model import Check, Obj, Setting, Severity
+from llm_grop.world.arrangement import UPRIGHT_TILT_RAD
 
 #: How far (metres) outside its support a stacked object's centre may lie.
 _STACK_SLACK_M = 0.005
@@ -50,7 +51,7 @@ def items_present(s: Setting, ctx: Context) -> list[Check]:
     name = "all items present"
     if s.requested is None:
         return skipped(name, "missing", "no request to compare with")
-    want, have = Counter(s.requested), Counter(o.kind for o in s.objects)
+    want, have = Counter(s.requested), Counter(o.kind for o in s.objects if o.upright)
     issues: list[Issue] = [
         ("missing", f"{kind} missing (requested {n}, found {have[kind]})")
         for kind, n in want.items() if have[kind] < n]
@@ -58,6 +59,15 @@ def items_present(s: Setting, ctx: Context) -> list[Check]:
     more = f"; also on the table: {', '.join(extra)}" if extra else ""
     return outcome(name, "missing", issues,
                     f"all {sum(want.values())} requested items present{more}")
+
+
+def upright(s: Setting, ctx: Context) -> list[Check]:
+    """Every object stands upright: one that tipped over counts as not placed."""
+    issues: list[Issue] = [
+        ("missing", f"{o.name} lies tipped over ({o.tilt_rad:.2f} rad from upright, at most "
+                    f"{UPRIGHT_TILT_RAD:.2f}); it counts as not placed")
+        for o in s.objects if not o.upright]
+    return outcome("upright", "missing", issues, "every object stands upright")
 
 
 def on_table(s: Setting, ctx: Context) -> list[Check]:
@@ -304,7 +314,8 @@ def napkin(s: Setting, ctx: Context) -> list[Check]:
         if o.x >= c.x:
             issues.append(("major", f"{o.name} at {pos(o)} is not left of the {c.name} "
                            f"(x = {c.x:+.3f} m); it goes left of the forks or on the plate"))
-        elif forks and o.x >= min(f.x for f in forks):
+        elif (apart := [f for f in forks if s.support[f.name] != o.name]) \
+                and o.x >= min(f.x for f in apart):
             issues.append(("minor", f"{o.name} at {pos(o)} lies between the forks and the "
                            f"{c.name}; it goes left of the forks"))
     return outcome("napkin position", "major", issues,
@@ -331,7 +342,7 @@ Rule = Callable[[Setting, Context], list[Check]]
 
 #: Every rule, in the order checks are reported.
 RULES: tuple[Rule, ...] = (
-    items_present, on_table, overlap, support_allowed, stack_geometry, stacking,
+    items_present, upright, on_table, overlap, support_allowed, stack_geometry, stacking,
     centre_object, cutlery_sides, cutlery_order, pieces_per_side, cutlery_parallel,
     bottoms_aligned, near_rim, plate_gap, utensil_spacing, drinks, bread_plate, bowls,
     napkin, compact,

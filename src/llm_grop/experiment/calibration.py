@@ -23,9 +23,11 @@ import numpy as np
 from scipy.optimize import minimize
 
 from llm_grop import seeds
+from llm_grop.execution import ExecutionPolicy
+from llm_grop.execution.judge import judged_place
 from llm_grop.planning.feasibility import ParametricFeasibility
 from llm_grop.planning.navigation import Navigator
-from llm_grop.simulation.base import SessionSimulator
+from llm_grop.simulation.base import Simulator
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box, Pose2D
 from llm_grop.world.request import items_from_names
@@ -54,7 +56,7 @@ def room(sources: tuple[ObjectSource, ...] = (), start: Pose2D | None = None) ->
                  source_tables=("dining table",), sources=sources, chairs_listed=True)
 
 
-def measure_manipulation(simulator: SessionSimulator, reaches: Sequence[float], trials: int,
+def measure_manipulation(simulator: Simulator, reaches: Sequence[float], trials: int,
                          seed: int = 0, on_sample: Callable[[Sample], None] | None = None
                          ) -> list[Sample]:
     """Picks and places at each planned reach (metres), ``trials`` episodes each; the goal
@@ -84,7 +86,11 @@ def measure_manipulation(simulator: SessionSimulator, reaches: Sequence[float], 
                 on_sample(out[-1])
             if picked.ok:
                 u, v, yaw = scene.room_to_table(ox, oy)
-                out.append(Sample(reach, session.place(name, u, v, yaw).ok))
+                # A place succeeds when the object comes to rest in place, as the
+                # executive judges it.
+                placed, _ = judged_place(session, scene, name, u, v, yaw, None,
+                                         ExecutionPolicy())
+                out.append(Sample(reach, placed.ok))
                 if on_sample:
                     on_sample(out[-1])
     return out
@@ -104,7 +110,7 @@ def _spot(rng: np.random.Generator, reach: float, radius: float
     return None
 
 
-def measure_navigation(simulator: SessionSimulator, clearances: Sequence[float], trials: int,
+def measure_navigation(simulator: Simulator, clearances: Sequence[float], trials: int,
                        seed: int = 0, on_sample: Callable[[Sample], None] | None = None
                        ) -> list[Sample]:
     """Drives to goals ``clearance`` metres from an obstacle, ``trials`` each: in turn the

@@ -37,6 +37,7 @@ from typing import Any
 
 from llm_grop import plugins
 from llm_grop.errors import BadInput
+from llm_grop.execution.policy import NAV_ATTEMPTS
 from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
 from llm_grop.experiment.paired import PairedComparison, paired_by_trial
 from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
@@ -111,6 +112,9 @@ def identity(exp: Experiment) -> dict[str, Any]:
         "simulator": s.simulator,
         # Absent for the default, so directories written before profiles existed resume.
         **({"feasibility": s.feasibility} if s.feasibility != "default" else {}),
+        # Absent for the defaults, like the other settings added after the first release.
+        **({"nav_attempts": s.nav_attempts} if s.nav_attempts != NAV_ATTEMPTS else {}),
+        **({"manip_attempts": s.manip_attempts} if s.manip_attempts is not None else {}),
         "plugins": _plugin_origins(exp),
         "seed": exp.seed,
         "tasks": hashlib.sha256(tasks).hexdigest()[:16] + (

@@ -20,6 +20,8 @@ from llm_grop.arrangement.diners import seat_items
 from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.errors import Infeasible
 from llm_grop.evaluation.rater import rate
+from llm_grop.execution import ExecutionPolicy
+from llm_grop.execution.policy import NAV_ATTEMPTS
 from llm_grop.llm.base import LLM, BackendOptions, CallLog
 from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import create_llm
@@ -73,7 +75,8 @@ class TrialSettings:
     ``simulator``: the simulator that executes every plan; ``feasibility``: the planner's
     feasibility profile; ``images``: where to draw each trial's final table (``None``: no
     pictures); ``llm_cache``: the LLM cache's directory (``None``: no cache), which changes
-    no answer and so is no part of the experiment's identity.
+    no answer and so is no part of the experiment's identity; ``nav_attempts`` and
+    ``manip_attempts``: the executive's attempt counts (``None``: the method's).
     """
 
     backend: str = "replay"
@@ -90,6 +93,8 @@ class TrialSettings:
     table: str | None = None
     fidelity_w_s_per_cm: float = 1.0
     llm_cache: str | None = None
+    nav_attempts: int = NAV_ATTEMPTS
+    manip_attempts: int | None = None
 
 
 class TrialRunner:
@@ -131,7 +136,10 @@ class TrialRunner:
                          options=self.settings.arrange, planner=GropOptions(
                              w=self.settings.w,
                              fidelity_w_s_per_cm=self.settings.fidelity_w_s_per_cm),
-                         simulator=self.simulator, feasibility=self.settings.feasibility)
+                         simulator=self.simulator, feasibility=self.settings.feasibility,
+                         execution=ExecutionPolicy(
+                             nav_attempts=self.settings.nav_attempts,
+                             manip_attempts=self.settings.manip_attempts))
         except Infeasible as exc:
             log.info("task %d trial %d %s: infeasible: %s", spec.task, spec.trial,
                      spec.method, exc)

@@ -24,6 +24,7 @@ from llm_grop import seeds
 from llm_grop.arrangement.pipeline import ArrangeOptions, arrange_items
 from llm_grop.arrangement.random_placement import random_configurations
 from llm_grop.errors import BadInput
+from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.llm.base import CallLog
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
@@ -82,7 +83,9 @@ class ComposedMethod:
 
     ``uses_llm``: arrangement from the LLM pipeline, else random. ``standing``: ``utility``
     (GROP) or ``uniform``. ``best_of_all``: plan for all M configurations and keep the best
-    (GROP), else the first that has a plan.
+    (GROP), else the first that has a plan. ``manip_attempts``: attempts per pick and per
+    place when executing (the authors gave LLM-GROP 20 and the baselines 10); a method
+    without it gets the baselines' count.
     """
 
     name: str
@@ -90,6 +93,7 @@ class ComposedMethod:
     uses_llm: bool
     standing: Literal["utility", "uniform"]
     best_of_all: bool
+    manip_attempts: int = BASELINE_MANIP_ATTEMPTS
 
     def propose(self, inp: EpisodeInput) -> Proposal:
         t0 = time.perf_counter()

@@ -12,6 +12,8 @@ from dataclasses import replace
 
 from llm_grop import seeds
 from llm_grop.arrangement.diners import violations_at_table
+from llm_grop.execution import ExecutionPolicy, execute
+from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.methods.base import EpisodeInput, Method
 from llm_grop.planning.feasibility import FeasibilityModel, feasibility_profile
 from llm_grop.planning.grop import build_plan, choose
@@ -28,12 +30,14 @@ log = logging.getLogger(__name__)
 
 def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | None,
                 simulator: Simulator, model: FeasibilityModel | str = "default",
-                planner: GropOptions | None = None) -> RunResult:
+                planner: GropOptions | None = None,
+                policy: ExecutionPolicy | None = None) -> RunResult:
     """Arrange, plan and execute in ``scene`` (its chairs are sensed at planning time).
 
     ``model`` is the planner's belief of how often actions succeed, a model or the name of
     a profile (:func:`~llm_grop.planning.feasibility.feasibility_profile`); ``simulator`` decides
-    what really happens.
+    what really happens, and the executive runs the plan on it under ``policy`` (default:
+    the authors' attempt counts, the method's for manipulation).
 
     Planning time counts the arrangement's computation without LLM calls, GROP and the
     OMPL paths. Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
@@ -57,9 +61,10 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     planning_s = proposal.compute_time_s + time.perf_counter() - t0
     say(f"executing the plan (configuration {plan.configuration_index + 1}, expected "
         f"utility {plan.utility:.1f} s) with {simulator.name}")
-    execution = simulator.execute(plan, scene,
-                                  seeds.stream(inp.seed, "simulator"),
-                                  replan=navigator)
+    attempts = getattr(method, "manip_attempts", BASELINE_MANIP_ATTEMPTS)
+    execution = execute(simulator, plan, scene, inp.items, seeds.stream(inp.seed, "simulator"),
+                        replan=navigator,
+                        policy=(policy or ExecutionPolicy()).for_method(attempts))
     planned = replace(proposal.arrangement, placements=plan.configuration)
     return RunResult(method=method.name, task=task, seed=inp.seed, request=inp.request,
                      planned=planned, plan=plan, execution=execution,

@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 from llm_grop.errors import BadInput
+from llm_grop.execution.policy import LLM_GROP_MANIP_ATTEMPTS
 from llm_grop.methods.base import ComposedMethod, Method
 from llm_grop.plugins import Registry
 
@@ -18,7 +19,8 @@ LATP = ComposedMethod("latp", "LLM arrangement with task planning, random standi
 GROP = ComposedMethod("grop", "random arrangement, utility-optimal task-motion plan",
                       uses_llm=False, standing="utility", best_of_all=True)
 LLM_GROP = ComposedMethod("llm-grop", "LLM arrangement, utility-optimal task-motion plan",
-                          uses_llm=True, standing="utility", best_of_all=True)
+                          uses_llm=True, standing="utility", best_of_all=True,
+                          manip_attempts=LLM_GROP_MANIP_ATTEMPTS)
 
 _FIELDS = ("name", "description", "uses_llm", "standing", "best_of_all")
 

@@ -1,11 +1,15 @@
-"""The simulator interface.
+"""The simulator interface: primitives, one attempt at a time.
 
-A simulator executes a :class:`~llm_grop.world.plan.Plan` in a scene and reports an
-:class:`~llm_grop.world.plan.Execution`. It owns its ground truth: what really happens
-when the robot drives, picks and places (its own success model or physics, the true
-chairs). The planner's feasibility model is only a belief and never reaches it, and the
-planner never learns which simulator runs its plan. Backends are registered in
-:mod:`llm_grop.simulation.registry`.
+A simulator offers sessions. A session is one episode in a scene, driven one action at a
+time: each navigate, pick or place is a single attempt that returns a typed
+:class:`~llm_grop.world.plan.ExecutedStep`, and the session reports where every object
+physically is (:class:`~llm_grop.world.plan.ObjectState`). It owns its ground truth: what
+really happens when the robot drives, picks and places (its own success model or physics,
+the true chairs). What to try next, when to give up and what counts as success belong to
+the executive above it (:mod:`llm_grop.execution`), as in dm_control and robosuite, where
+the physics offers state and actuation and the task logic lives above. The planner's
+feasibility model is only a belief and never reaches a simulator. Backends are registered
+in :mod:`llm_grop.simulation.registry`.
 """
 
 from __future__ import annotations
@@ -15,9 +19,9 @@ from typing import Protocol
 
 import numpy as np
 
-from llm_grop.world.arrangement import Item, Placement
+from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
-from llm_grop.world.plan import ExecutedStep, Execution, Plan, Point
+from llm_grop.world.plan import ExecutedStep, ObjectState, Point
 from llm_grop.world.scene import Scene
 
 
@@ -30,40 +34,12 @@ class PathPlanner(Protocol):
         ...
 
 
-class Simulator(Protocol):
-    """Executes plans. ``name`` is the name it is registered under (it goes into the run
-    JSON); all randomness comes from the ``rng`` given to :meth:`execute`."""
-
-    name: str
-
-    def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
-                replan: PathPlanner) -> Execution:
-        """Run ``plan`` in ``scene`` (its chairs are the true ones) and report what happened.
-
-        ``final`` holds every object that reached the table where it really ended up
-        (table frame), and each successful ``place`` step's ``pose`` is where it landed.
-        """
-        ...
-
-
-class SessionSimulator(Protocol):
-    """A simulator that can also be driven one action at a time."""
-
-    name: str
-
-    def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
-                replan: PathPlanner) -> Session:
-        """A new episode in ``scene`` with ``items`` at their starts."""
-        ...
-
-
 class Session(Protocol):
-    """One episode driven one action at a time, for agents that choose their own actions
-    (the Gymnasium environment). A simulator that offers it has a method
-    ``session(scene, items, rng, *, replan) -> Session``.
+    """One episode driven one attempt at a time.
 
-    Poses are room frame unless said otherwise (metres, radians); each action returns the
-    :class:`~llm_grop.world.plan.ExecutedStep` it produced.
+    Poses are room frame unless said otherwise (metres, radians). A failed attempt's step
+    says why in ``reason`` (:data:`~llm_grop.world.plan.REASONS`); its ``duration_s`` is
+    the simulated time it took, a failed inverse kinematics attempt included.
     """
 
     @property
@@ -80,24 +56,44 @@ class Session(Protocol):
         """The base's pose."""
         ...
 
-    def object_poses(self) -> dict[str, tuple[float, float, float, float]]:
-        """Every object's bottom centre ``(x, y, z)`` and yaw."""
+    def objects(self) -> dict[str, ObjectState]:
+        """Where every object of the episode physically is, after the physics settled."""
         ...
 
-    def navigate(self, goal: Pose2D) -> ExecutedStep:
-        """One attempt to drive to ``goal`` along a path the robot plans itself."""
+    def navigate(self, goal: Pose2D, path: Sequence[Point] = ()) -> ExecutedStep:
+        """One attempt to drive to ``goal``: along ``path`` when given (the plan's), else
+        along a path the robot plans itself from where it stands."""
         ...
 
     def pick(self, name: str) -> ExecutedStep:
-        """One attempt to pick ``name`` from where the robot stands."""
+        """One attempt to pick ``name`` from where it lies, from where the robot stands."""
         ...
 
     def place(self, name: str, x: float, y: float, yaw: float, on: str | None = None
               ) -> ExecutedStep:
-        """One attempt to put the held ``name`` at ``(x, y, yaw)`` in the table frame, on
-        the object ``on`` (``None``: the table)."""
+        """One attempt to put the held ``name`` down at ``(x, y, yaw)`` in the target
+        table's frame, on the object ``on`` (``None``: the table). ``ok`` means the hand
+        let go there; where the object then came to rest is read from :meth:`objects`."""
         ...
 
-    def final(self) -> tuple[Placement, ...]:
-        """Every object on the target table, where it is (table frame)."""
+    def release(self) -> float:
+        """Give up what the hand holds: put it down away from the target table (on the
+        floor). The simulated seconds it took."""
+        ...
+
+    def close(self) -> None:
+        """End the episode (a video being recorded is finished)."""
+        ...
+
+
+class Simulator(Protocol):
+    """Offers sessions. ``name`` is the name it is registered under (it goes into the run
+    JSON); all randomness comes from the ``rng`` given to :meth:`session`."""
+
+    name: str
+
+    def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
+                replan: PathPlanner) -> Session:
+        """A new episode in ``scene`` (its chairs are the true ones) with ``items`` at
+        their starts."""
         ...

@@ -19,7 +19,7 @@ SIMULATORS: Registry[Factory] = Registry(
     group="llm_grop.simulators", kind="simulator", flag="--simulator", module=__name__,
     builtins={"kinematic2d": "llm_grop.simulation.kinematic2d:Kinematic2D",
               "mujoco": "llm_grop.simulation.mujoco.simulator:MujocoSimulator"},
-    factory="() -> Simulator", product=("name", "execute"))
+    factory="() -> Simulator", product=("name", "session"))
 
 
 def register_simulator(name: str, factory: Factory) -> None:

@@ -47,6 +47,9 @@ class Placement:
     counter-clockwise); ``size`` is the footprint ``(sx, sy)`` in metres in the
     object's own frame; ``on`` names the object it rests on (``None``: the table);
     ``diner`` is the index of the diner whose setting it belongs to (``None``: one diner).
+    After execution, ``z_m`` is the height of its base above the table top (metres) and
+    ``tilt_rad`` the angle between its up axis and the vertical (radians); both are 0 for
+    a planned placement.
     """
 
     name: str
@@ -59,6 +62,18 @@ class Placement:
     kind: str = ""
     height: float = 0.0
     diner: int | None = None
+    z_m: float = 0.0
+    tilt_rad: float = 0.0
+
+    @property
+    def upright(self) -> bool:
+        """Whether it stands upright: tilted at most :data:`UPRIGHT_TILT_RAD`."""
+        return self.tilt_rad <= UPRIGHT_TILT_RAD
+
+
+#: Largest tilt, radians, of an object that still counts as upright (about 20 degrees):
+#: the executive's default place tolerance and the rater's test for a tipped object.
+UPRIGHT_TILT_RAD = 0.35
 
 
 def item_placement(item: Item) -> Placement:

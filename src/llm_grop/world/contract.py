@@ -23,6 +23,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, Strict, model_validator
 
+from llm_grop.world.plan import Reason
 from llm_grop.world.relation import RELATION_NAMES
 from llm_grop.world.scene_file import SceneFile
 
@@ -104,6 +105,11 @@ class ObjectDoc(Doc):
                           "it (the request does not name it, or not how many), or the "
                           "paper's task lists it")
     words: Text | None = Field(None, description="the request's words it was read from")
+    z_m: Num | None = Field(None, description="after execution: height of the object's base "
+                                              "above the table top, metres")
+    tilt_rad: Annotated[float, Strict(), Field(ge=0, allow_inf_nan=False)] | None = Field(
+        None, description="after execution: angle between the object's up axis and the "
+                          "vertical, radians")
 
 
 class RelationDoc(Doc):
@@ -182,6 +188,8 @@ class StepDoc(Doc):
     note: Text | None = None
     path: list[tuple[Num, Num]] | None = Field(None, description="the driven path, room "
                                                                  "frame, metres")
+    reason: Reason | None = Field(None, description="why a failed attempt failed, from one "
+                                                    "closed list")
 
 
 class StandingDoc(Doc):
@@ -266,11 +274,14 @@ class RunDoc(Doc):
     task: Int | None = Field(description="the task id, or null for a free request")
     seed: Int
     request: Text
-    success: Bool = Field(description="every requested object reached the table")
+    success: Bool = Field(description="every requested object ended upright on its "
+                                      "intended support, within tolerance of its target")
     execution_time_s: Seconds = Field(description="simulated seconds")
     planning_time_s: Seconds = Field(description="wall-clock seconds, LLM calls excluded")
     failures: Int = Field(description="failed action attempts")
     unplaced: list[Name]
+    unplaced_reasons: dict[Name, Reason] | None = Field(
+        None, description="why each unplaced object is not in place, from the steps' list")
     steps: list[StepDoc]
     final: ArrangementDoc = Field(description="where the objects really ended up")
     plan: PlanDoc

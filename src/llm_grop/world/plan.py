@@ -12,6 +12,17 @@ from llm_grop.world.scene import Scene
 
 Action = Literal["navigate", "pick", "place"]
 Point = tuple[float, float]
+#: Why an attempt failed, or why an object ended unplaced: one closed list for every
+#: simulator. ``blocked``: no path, or the base was held back short of its goal;
+#: ``contact``: the robot (or what it holds) touched furniture; ``no_ik``: the arm cannot
+#: reach the pose from where the base stands; ``grasp_missed``: the gripper closed on
+#: nothing; after release, the object ``tipped`` over, ``slid`` away from its target,
+#: ``fell`` to the floor, or came to rest on the ``wrong_support``; ``disturbed``: a
+#: later action moved an object that was in place out of tolerance.
+Reason = Literal["blocked", "contact", "no_ik", "grasp_missed", "tipped", "slid", "fell",
+                 "wrong_support", "disturbed"]
+REASONS: tuple[Reason, ...] = ("blocked", "contact", "no_ik", "grasp_missed", "tipped",
+                               "slid", "fell", "wrong_support", "disturbed")
 
 
 @dataclass(frozen=True)
@@ -93,7 +104,9 @@ class ExecutedStep:
     """One action as the simulator executed it (an attempt; failures are kept).
 
     ``path`` is the driven path (room frame); ``pose`` for ``place`` is where the object
-    really landed, table frame; ``attempt`` counts from 1; ``note`` says why it failed.
+    really landed, table frame; ``attempt`` counts from 1; ``note`` says why it failed in
+    words and ``reason`` as one of :data:`REASONS` (``None`` when it succeeded, or for an
+    action refused before any attempt, such as a pick while the hand is full).
     """
 
     action: Action
@@ -106,14 +119,37 @@ class ExecutedStep:
     pose: tuple[float, float, float] | None = None
     attempt: int = 1
     note: str = ""
+    reason: Reason | None = None
+
+
+@dataclass(frozen=True)
+class ObjectState:
+    """Where an object physically is: its bottom centre ``(x, y, z)`` in the room frame
+    (metres), ``yaw`` about the vertical and ``tilt_rad`` of its up axis from the vertical
+    (radians); ``table`` is the table it lies on or above (``None``: the floor, or the
+    hand), ``on`` the object it rests on (``None``: none, read from contact in physics),
+    ``held`` whether the hand holds it."""
+
+    name: str
+    x: float
+    y: float
+    z: float
+    yaw: float
+    tilt_rad: float = 0.0
+    table: str | None = None
+    on: str | None = None
+    held: bool = False
 
 
 @dataclass(frozen=True)
 class Execution:
-    """What a simulator reports after executing a plan.
+    """What happened when a plan was executed.
 
-    ``final`` holds the objects where they really are (table frame); ``unplaced`` the
-    objects that never reached the table; ``execution_time_s`` the simulated seconds.
+    ``final`` holds every object resting on the target table where it really is (table
+    frame, with its height and tilt); ``unplaced`` the requested objects that did not end
+    upright on their intended support within tolerance of their target, and
+    ``unplaced_reasons`` why, one of :data:`REASONS` per object;
+    ``execution_time_s`` the simulated seconds.
     """
 
     steps: tuple[ExecutedStep, ...]
@@ -121,10 +157,12 @@ class Execution:
     unplaced: tuple[str, ...]
     execution_time_s: float
     robot_end: Pose2D
+    unplaced_reasons: tuple[tuple[str, Reason], ...] = ()
 
     @property
     def success(self) -> bool:
-        """Whether every object reached the table."""
+        """Whether every requested object ended upright on its intended support, within
+        tolerance of its target."""
         return not self.unplaced
 
     @property
@@ -155,5 +193,6 @@ class RunResult:
 
     @property
     def success(self) -> bool:
-        """Whether every object reached the table."""
+        """Whether every requested object ended upright on its intended support, within
+        tolerance of its target."""
         return self.execution.success

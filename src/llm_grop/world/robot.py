@@ -21,6 +21,8 @@ class Robot:
         turn_speed_radps: turning speed in place, radians per second.
         pick_time_s: time for one pick attempt, seconds.
         place_time_s: time for one place attempt, seconds.
+        ik_failure_s: time the arm's motion planner spends before it reports that no
+            inverse kinematics solution reaches a pose, seconds.
         capacity: how many objects it carries at once.
     """
 
@@ -31,6 +33,7 @@ class Robot:
     turn_speed_radps: float = 1.0
     pick_time_s: float = 8.0
     place_time_s: float = 8.0
+    ik_failure_s: float = 2.0
     capacity: int = 1
 
     def __post_init__(self) -> None:
@@ -40,7 +43,7 @@ class Robot:
         if not 0 <= self.reach_min_m < self.reach_max_m:
             raise BadInput(
                 f"robot.reach_min_m: must be in [0, reach_max_m), got {self.reach_min_m}")
-        if self.pick_time_s < 0 or self.place_time_s < 0:
-            raise BadInput("robot.pick_time_s/place_time_s: must not be negative")
+        if self.pick_time_s < 0 or self.place_time_s < 0 or self.ik_failure_s < 0:
+            raise BadInput("robot.pick_time_s/place_time_s/ik_failure_s: must not be negative")
         if self.capacity < 1:
             raise BadInput(f"robot.capacity: must be at least 1, got {self.capacity}")

@@ -51,6 +51,8 @@ def step_doc(s: ExecutedStep) -> StepDoc:
         out["note"] = s.note
     if s.path:
         out["path"] = [(rounded(x), rounded(y)) for x, y in s.path]
+    if s.reason is not None:
+        out["reason"] = s.reason
     return StepDoc(**out)
 
 
@@ -107,8 +109,9 @@ def run_doc(r: RunResult, *, llm_log: bool = True) -> RunDoc:
         planning_time_s=round(r.planning_time_s, 4),
         failures=ex.failures,
         unplaced=list(ex.unplaced),
+        unplaced_reasons=dict(ex.unplaced_reasons),
         steps=[step_doc(s) for s in ex.steps],
-        final=arrangement_doc(replace(r.final, llm=None)),
+        final=arrangement_doc(replace(r.final, llm=None), physical=True),
         plan=plan_doc(r.plan),
         planned=arrangement_doc(r.planned, llm_log=llm_log),
         simulator=r.simulator,

@@ -116,6 +116,7 @@ class RobotEntry(_SceneModel):
     turn_speed_radps: FiniteFloat | None = None
     pick_time_s: FiniteFloat | None = None
     place_time_s: FiniteFloat | None = None
+    ik_failure_s: FiniteFloat | None = None
     capacity: StrictInt | None = None
 
 

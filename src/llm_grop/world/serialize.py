@@ -48,12 +48,15 @@ def _relation(rel: Relation, line: bool = False) -> RelationDoc:
                        source=rel.source, **extra)
 
 
-def _object(p: Placement, origin: tuple[str, str] | None = None) -> ObjectDoc:
+def _object(p: Placement, origin: tuple[str, str] | None = None, physical: bool = False
+            ) -> ObjectDoc:
     extra: dict[str, Any] = {"diner": p.diner} if p.diner is not None else {}
     if origin is not None:
         extra["source"] = origin[0]
         if origin[1]:
             extra["words"] = origin[1]
+    if physical:
+        extra |= {"z_m": rounded(p.z_m), "tilt_rad": rounded(p.tilt_rad)}
     return ObjectDoc(name=p.name, x=rounded(p.x), y=rounded(p.y), yaw=rounded(p.yaw),
                      shape=p.shape, size=(rounded(p.size[0]), rounded(p.size[1])), on=p.on,
                      kind=p.kind or p.name, height=rounded(p.height), **extra)
@@ -65,9 +68,11 @@ def _call(c: CallRecord) -> LLMCallDoc:
                       seed=c.seed, **({"cached": True} if c.cached else {}))
 
 
-def arrangement_doc(a: Arrangement, *, llm_log: bool = True) -> ArrangementDoc:
+def arrangement_doc(a: Arrangement, *, llm_log: bool = True, physical: bool = False
+                    ) -> ArrangementDoc:
     """The contract's arrangement document of ``a``; ``llm_log=False`` leaves the LLM's
-    call log out (its backend, model and call count stay)."""
+    call log out (its backend, model and call count stay); ``physical`` writes each
+    object's ``z_m`` and ``tilt_rad`` (an executed arrangement, the run JSON's ``final``)."""
     llm: dict[str, Any] = {}
     origins = {name: (source, words) for name, source, words in a.origins}
     if a.llm is not None:
@@ -80,7 +85,7 @@ def arrangement_doc(a: Arrangement, *, llm_log: bool = True) -> ArrangementDoc:
                        size=(rounded(a.table.width), rounded(a.table.depth)),
                        **({"diners": [tuple(rounded(v) for v in s.as_list())
                                       for s in a.table.diners]} if a.table.diners else {})),
-        objects=[_object(p, origins.get(p.name)) for p in a.placements],
+        objects=[_object(p, origins.get(p.name), physical) for p in a.placements],
         relations=[_relation(r) for r in a.relations],
         **llm,
         warnings=list(a.warnings),
@@ -105,7 +110,8 @@ def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -
         if o.size is None:
             raise BadInput(f"{where}: objects[{i}] ({o.name!r}).size: missing")
         placements.append(Placement(o.name, o.x, o.y, o.yaw, o.shape or "box", o.size, o.on,
-                                    o.kind or o.name, o.height or 0.0, o.diner))
+                                    o.kind or o.name, o.height or 0.0, o.diner,
+                                    o.z_m or 0.0, o.tilt_rad or 0.0))
     try:
         relations = tuple(Relation(r.subject, r.relation, r.reference, r.words or "",
                                    source=r.source or "llm", gap_m=r.gap_m)

@@ -10,8 +10,6 @@ class MujocoOptions:
     """Settings of the 3D world.
 
     Attributes:
-        nav_attempts: attempts per navigation goal (the authors used 3).
-        manip_attempts: attempts per pick or place.
         nav_noise_var_m2: variance of the final base position, per axis, square metres.
         heading_noise_std_rad: standard deviation of the final heading, radians.
         timestep_s: physics time step, seconds.
@@ -21,8 +19,6 @@ class MujocoOptions:
         video_fps: frames per second of the video.
     """
 
-    nav_attempts: int = 3
-    manip_attempts: int = 5
     nav_noise_var_m2: float = 0.03
     heading_noise_std_rad: float = 0.03
     timestep_s: float = 0.004

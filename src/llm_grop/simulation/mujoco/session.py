@@ -1,78 +1,173 @@
-"""A MuJoCo episode driven one action at a time (see
-:class:`~llm_grop.simulation.base.Session`)."""
+"""A MuJoCo episode driven one attempt at a time (see
+:class:`~llm_grop.simulation.base.Session`): the base's navigation legs and the arm's picks
+and places, each recorded with all the simulated time it took."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import logging
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
 
-from llm_grop.simulation.mujoco.episode import Episode, final_placements
+from llm_grop.simulation.base import PathPlanner
+from llm_grop.simulation.mujoco import manipulation
+from llm_grop.simulation.mujoco.options import MujocoOptions
 from llm_grop.simulation.mujoco.render import View, picture
-from llm_grop.world.arrangement import Placement
+from llm_grop.simulation.mujoco.world import World
 from llm_grop.world.geometry2d import Pose2D
-from llm_grop.world.plan import ExecutedStep
+from llm_grop.world.plan import ExecutedStep, ObjectState, Point, Reason
+from llm_grop.world.scene import Scene
+
+log = logging.getLogger(__name__)
+
+#: Radii, metres, searched round the base for a free start when it stands where the path
+#: planner cannot start (against furniture after a bump).
+START_SEARCH_M = (0.0, 0.1, 0.2, 0.3)
+#: A body lies on a table when its bottom is at most this far below the top (metres).
+ON_TABLE_BELOW_M = 0.05
+#: ... and at most this far above it (metres).
+ON_TABLE_ABOVE_M = 0.5
 
 
 class MujocoSession:
-    """One episode in the 3D world; every method runs physics until its action ends."""
+    """One episode in the 3D world; every method runs physics until its attempt ends."""
 
-    def __init__(self, episode: Episode, placements: Sequence[Placement]) -> None:
-        self.episode = episode
-        self.objects = {p.name: p for p in placements}
+    def __init__(self, options: MujocoOptions, scene: Scene, rng: np.random.Generator,
+                 replan: PathPlanner, world: World, names: Sequence[str],
+                 on_close: Callable[[], None] | None = None) -> None:
+        self.o, self.scene, self.rng, self.replan, self.w = options, scene, rng, replan, world
+        self.names = tuple(names)
+        self.mark = float(world.d.time)
+        self.on_close = on_close
 
+    # -- state ------------------------------------------------------------------------
     @property
     def time_s(self) -> float:
         """Simulated seconds so far."""
-        return float(self.episode.w.d.time)
+        return float(self.w.d.time)
 
     @property
     def held(self) -> str | None:
         """The object in the hand, if any."""
-        return self.episode.w.held
+        return self.w.held
 
     def robot_pose(self) -> Pose2D:
         """The base's pose (room frame)."""
-        return self.episode.w.base_pose()
+        return self.w.base_pose()
 
-    def object_poses(self) -> dict[str, tuple[float, float, float, float]]:
-        """Every object's bottom centre ``(x, y, z)`` and yaw (room frame, metres, radians)."""
+    def objects(self) -> dict[str, ObjectState]:
+        """Where every object is (room frame), its support read from contact."""
         out = {}
-        for name in self.objects:
-            p = self.episode.w.object_pose(name)
-            out[name] = (p.x, p.y, p.z, p.yaw)
+        for name in self.names:
+            p = self.w.object_pose(name)
+            # A berry has no up axis: any way up is upright.
+            tilt = 0.0 if self.w.wm.objects[name].style == "berry" else p.tilt
+            table = None
+            for t in self.scene.tables:
+                top = self.w.top_z(t.name)
+                if t.contains(p.x, p.y) and top - ON_TABLE_BELOW_M <= p.z <= top + ON_TABLE_ABOVE_M:
+                    table = t.name
+                    break
+            out[name] = ObjectState(name, p.x, p.y, p.z, p.yaw, tilt, table,
+                                    self.w.support_of(name), held=name == self.w.held)
         return out
-
-    def navigate(self, goal: Pose2D) -> ExecutedStep:
-        """One attempt to drive to ``goal`` along a path the robot plans itself."""
-        e = self.episode
-        path = e.path_to(goal, (), first=False)
-        if not path:
-            e.record(ExecutedStep("navigate", False, 0.0, None, goal, note="no path"))
-        elif e.drive_to(goal, path, None, 1):
-            e.goal = goal
-        return e.out[-1]
-
-    def pick(self, name: str) -> ExecutedStep:
-        """One attempt to pick ``name``."""
-        if self.held is not None:
-            self.episode.record(ExecutedStep("pick", False, 0.0, name,
-                                             note=f"pick failed: the hand holds {self.held!r}"))
-            return self.episode.out[-1]
-        return self.episode.pick(name)
-
-    def place(self, name: str, x: float, y: float, yaw: float, on: str | None = None
-              ) -> ExecutedStep:
-        """One attempt to place ``name`` at ``(x, y, yaw)`` in the table frame (metres,
-        radians), on the object ``on`` if that is on the table."""
-        p = self.objects[name]
-        return self.episode.place(replace(p, x=x, y=y, yaw=yaw, on=on))
-
-    def final(self) -> tuple[Placement, ...]:
-        """Every object on the target table, where it is (table frame)."""
-        return final_placements(self.episode.w, self.episode.scene, tuple(self.objects.values()))
 
     def picture(self, view: View = "room", size: tuple[int, int] | None = None) -> np.ndarray:
         """An RGB image of the world now."""
-        return picture(self.episode.w, view, size)
+        return picture(self.w, view, size)
+
+    def close(self) -> None:
+        """Finish the episode's video, if one is being recorded."""
+        if self.on_close is not None:
+            self.on_close()
+            self.on_close = None
+
+    def _step(self, step: ExecutedStep) -> ExecutedStep:
+        """``step`` with all simulated time since the last attempt as its duration."""
+        now = float(self.w.d.time)
+        step = replace(step, duration_s=round(now - self.mark, 6))
+        self.mark = now
+        return step
+
+    # -- navigation -------------------------------------------------------------------
+    def navigate(self, goal: Pose2D, path: Sequence[Point] = ()) -> ExecutedStep:
+        """One attempt to drive to ``goal``, along ``path`` when given, and on to a noisy
+        final pose (the authors' variance); a contact stops it and the base backs off."""
+        route = tuple(path) or self._path_to(goal)
+        if not route:
+            return self._step(ExecutedStep("navigate", False, 0.0, goal=goal, note="no path",
+                                           reason="blocked"))
+        drive = self.w.drive(route, goal.theta)
+        if not drive.ok:
+            self.w.back_off()
+            return self._step(ExecutedStep("navigate", False, 0.0, goal=goal, path=drive.path,
+                                           reason=_reason(drive.note),
+                                           note=f"navigation failed: {drive.note}"))
+        std = math.sqrt(self.o.nav_noise_var_m2)
+        dx, dy = (float(v) for v in self.rng.normal(0.0, std, 2))
+        dth = float(self.rng.normal(0.0, self.o.heading_noise_std_rad))
+        here = self.w.base_pose()
+        settle = self.w.drive([(here.x + dx, here.y + dy)], goal.theta + dth, holonomic=True)
+        if not settle.ok:
+            self.w.back_off()
+        return self._step(ExecutedStep(
+            "navigate", settle.ok, 0.0, goal=goal, path=drive.path + settle.path[1:],
+            reason=None if settle.ok else _reason(settle.note),
+            note="" if settle.ok else f"navigation failed on arrival: {settle.note}"))
+
+    def _path_to(self, goal: Pose2D) -> tuple[Point, ...]:
+        """A new path to ``goal`` from where the base stands; when the planner cannot start
+        there (against furniture), from the nearest free spot around it."""
+        here = self.w.base_pose()
+        seed = int(self.rng.integers(2**31))
+        for radius in START_SEARCH_M:
+            for k in range(8 if radius else 1):
+                a = 2 * math.pi * k / 8
+                start = (here.x + radius * math.cos(a), here.y + radius * math.sin(a))
+                path = self.replan.plan(start, (goal.x, goal.y), seed=seed)
+                if path:
+                    return path if radius else path[1:]
+        return ()
+
+    # -- manipulation -----------------------------------------------------------------
+    def pick(self, name: str) -> ExecutedStep:
+        """One attempt to pick ``name`` where it lies."""
+        if self.w.held is not None:
+            return ExecutedStep("pick", False, 0.0, name,
+                                note=f"pick refused: the hand holds {self.w.held!r}")
+        standing = self.w.base_pose()
+        p = self.w.object_pose(name)
+        result = manipulation.pick(self.w, name)
+        return self._step(ExecutedStep(
+            "pick", result.ok, 0.0, name, standing=standing,
+            pose=(round(p.x, 4), round(p.y, 4), 0.0), reason=result.reason,
+            note="" if result.ok else f"pick failed: {result.note}"))
+
+    def place(self, name: str, x: float, y: float, yaw: float, on: str | None = None
+              ) -> ExecutedStep:
+        """One attempt to put the held ``name`` at ``(x, y, yaw)`` in the table frame
+        (metres, radians), on ``on`` (``None``: the table), let go and let it settle."""
+        if self.w.held != name:
+            return ExecutedStep("place", False, 0.0, name,
+                                note=f"place refused: the hand does not hold {name!r}")
+        standing = self.w.base_pose()
+        q = self.scene.table_to_room(x, y, yaw)
+        result = manipulation.place(self.w, name, q.x, q.y, q.theta, on or self.scene.target)
+        return self._step(ExecutedStep(
+            "place", result.ok, 0.0, name, standing=standing, reason=result.reason,
+            note="" if result.ok else f"place failed: {result.note}"))
+
+    def release(self) -> float:
+        """Lower what the hand holds in front of the base and let it fall to the floor;
+        the simulated seconds it took."""
+        manipulation.release(self.w)
+        now = float(self.w.d.time)
+        spent, self.mark = now - self.mark, now
+        return round(spent, 6)
+
+
+def _reason(note: str) -> Reason:
+    """A failed drive's reason: ``contact`` when it touched furniture, else ``blocked``."""
+    return "contact" if note.startswith("contact") else "blocked"

@@ -1,19 +1,14 @@
-"""The MuJoCo simulator (registered as ``mujoco``): the plan executed by a mobile
-manipulator in 3D physics.
+"""The MuJoCo simulator (registered as ``mujoco``): a mobile manipulator in 3D physics,
+offering the executive one attempt at a time (:class:`MujocoSession`).
 
-* Navigation: the base follows the planned path under position control, turning in place
-  between segments, and on to a noisy final pose (the authors' variance, 0.03 m² per
-  axis). Contact with furniture (a chair the planner did not expect, a table a noisy
-  arrival runs into) stops it: a navigation failure; the robot backs off, replans from
-  where it stopped and tries again, ``nav_attempts`` times per goal, then the plan's
-  fallback goals.
+* Navigation: the base follows a path under position control, turning in place between
+  segments, and on to a noisy final pose (the authors' variance, 0.03 m² per axis).
+  Contact with furniture (a chair the planner did not expect, a table a noisy arrival
+  runs into) stops it, and it backs off.
 * Manipulation (:mod:`~llm_grop.simulation.mujoco.manipulation`): IK, pre-grasp, grasp,
-  close, lift, carry; pre-place, lower, release, settle. A pick or a place that fails
-  before release is retried ``manip_attempts`` times, re-approaching the standing pose
-  (fresh noise) when the arm could not reach. An object that tips, slides or falls after
-  release stays where physics left it.
-* Truth: the final arrangement is read from the settled bodies (table frame); ``on`` is
-  the tableware an object's bottom rests on.
+  close, lift, carry; pre-place, lower, release, settle.
+* Truth: every object's pose, tilt and support (from contact) are read from the settled
+  bodies.
 """
 
 from __future__ import annotations
@@ -25,7 +20,6 @@ import numpy as np
 from llm_grop.errors import BadInput
 from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.mujoco.arm import ArmIK
-from llm_grop.simulation.mujoco.episode import Episode, final_placements
 from llm_grop.simulation.mujoco.options import MujocoOptions
 from llm_grop.simulation.mujoco.render import VideoRecorder, View, check_rendering, picture
 from llm_grop.simulation.mujoco.session import MujocoSession
@@ -33,15 +27,14 @@ from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.simulation.mujoco.world_model import ObjectStart, build, check_scene
 from llm_grop.world.arrangement import Item, Placement, item_placement
-from llm_grop.world.plan import Execution, Plan
 from llm_grop.world.scene import Scene
 
 __all__ = ["MujocoOptions", "MujocoSimulator"]
 
 
 class MujocoSimulator:
-    """Executes plans in MuJoCo. After :meth:`execute`, :attr:`world` holds the settled
-    episode and :meth:`picture` renders it. ``on_frame`` is called with the world every
+    """Runs episodes in MuJoCo. :attr:`world` holds the last episode's world and
+    :meth:`picture` renders it. ``on_frame`` is called with the world every
     ``options.video_frame_s`` simulated seconds (a video recorder, a viewer)."""
 
     name = "mujoco"
@@ -72,42 +65,19 @@ class MujocoSimulator:
         for item in items:
             tableware(item_placement(item))
 
-    def execute(self, plan: Plan, scene: Scene, rng: np.random.Generator, *,
-                replan: PathPlanner) -> Execution:
-        """Run ``plan`` in ``scene`` (its chairs are the real ones)."""
+    def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
+                replan: PathPlanner) -> MujocoSession:
+        """A new episode in ``scene`` with ``items`` at their starts, driven one attempt at
+        a time; with ``options.video_path`` its video is recorded until it is closed."""
         o = self.options
-        world = self._world(scene, plan.configuration)
+        placements = tuple(item_placement(i) for i in items)
+        world = self._world(scene, placements)
         recorder = VideoRecorder(o.video_path, fps=o.video_fps, size=o.image_size) \
             if o.video_path else None
         if recorder is not None:
             world.on_frame = _both(self.on_frame, recorder)
-        run = Episode(o, scene, rng, replan, world)
-        targets = {p.name: p for p in plan.configuration}
-        try:
-            for step in plan.steps:
-                if step.object in run.abandoned:
-                    continue
-                if step.action == "navigate":
-                    run.navigate(step)
-                else:
-                    run.manipulate(step, targets[step.object or ""])
-        finally:
-            if recorder is not None:
-                recorder.close()
-        final = final_placements(world, scene, plan.configuration)
-        placed = {p.name for p in final}
-        unplaced = tuple(n for n in plan.order if n not in placed)
-        run.absorb()
-        return Execution(tuple(run.out), final, unplaced,
-                         round(sum(s.duration_s for s in run.out), 6), world.base_pose())
-
-    def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
-                replan: PathPlanner) -> MujocoSession:
-        """A new episode in ``scene`` with ``items`` at their starts, driven one action at
-        a time (the Gymnasium environment uses this)."""
-        placements = tuple(item_placement(i) for i in items)
-        world = self._world(scene, placements)
-        return MujocoSession(Episode(self.options, scene, rng, replan, world), placements)
+        return MujocoSession(o, scene, rng, replan, world, [p.name for p in placements],
+                             recorder.close if recorder is not None else None)
 
     def _world(self, scene: Scene, placements: Sequence[Placement]) -> World:
         if self._ik is None:

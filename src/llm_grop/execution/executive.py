@@ -1,0 +1,293 @@
+"""Running a plan on a session: the one retry, fallback, re-grasp and give-up policy.
+
+* **Navigation.** Each goal gets ``nav_attempts`` attempts: the first follows the plan's
+  path, later ones a path the robot plans from where it stopped. When a goal has no path,
+  or its attempts run out, the plan's fallback goals are tried in turn. When every goal
+  fails, the object of the leg is given up.
+* **Picks and places.** Each object gets ``manip_attempts`` picks and as many places,
+  re-grasps and re-places included. An attempt the arm cannot reach (``no_ik``) is
+  followed by a move to the leg's next standing position: its fallbacks, then a fresh
+  arrival at the planned one.
+* **Success after release.** A released object is judged where it came to rest
+  (:func:`~llm_grop.execution.judge.judge`). One that slid or landed on the wrong support
+  but stands upright on the table is re-grasped from where it lies and placed again;
+  one that tipped or fell is given up.
+* **Disturbance.** After every attempt the objects already in place are judged again; one
+  that a later action moved out of tolerance is reported ``disturbed`` and, while its
+  attempts remain and nothing rests on it, re-placed from its own standing position.
+* **Giving up.** The object in the hand is put down away from the table (on the floor),
+  and the plan goes on with the next object.
+
+The result is read from the session at the end: ``final`` lists every object on the
+target table as it is, and an object is placed exactly when it is in place there.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from llm_grop.execution.judge import final_placements, judge, judged_place, table_pose
+from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS, ExecutionPolicy
+from llm_grop.simulation.base import PathPlanner, Session, Simulator
+from llm_grop.world.arrangement import Item
+from llm_grop.world.geometry2d import Pose2D
+from llm_grop.world.plan import ExecutedStep, Execution, ObjectState, Plan, Point, Reason, Step
+from llm_grop.world.scene import Scene
+
+log = logging.getLogger(__name__)
+
+
+def execute(simulator: Simulator, plan: Plan, scene: Scene, items: Sequence[Item],
+            rng: np.random.Generator, *, replan: PathPlanner,
+            policy: ExecutionPolicy | None = None) -> Execution:
+    """Run ``plan`` for ``items`` in a new episode of ``simulator`` in ``scene`` (its chairs
+    are the true ones), the simulator's randomness from ``rng``; ``replan`` is the robot's
+    own path planner."""
+    return execute_plan(plan, simulator.session(scene, items, rng, replan=replan), scene,
+                        policy)
+
+
+def execute_plan(plan: Plan, session: Session, scene: Scene,
+                 policy: ExecutionPolicy | None = None) -> Execution:
+    """Run ``plan`` on ``session`` (an episode in ``scene``) under ``policy`` and report
+    what physically happened; the session is closed at the end."""
+    try:
+        return _Executive(plan, session, scene, policy or ExecutionPolicy()).run()
+    finally:
+        session.close()
+
+
+class _Executive:
+    """The state of one execution: every attempt so far, the objects in place as they
+    settled, and the attempts each object has left."""
+
+    def __init__(self, plan: Plan, session: Session, scene: Scene,
+                 policy: ExecutionPolicy) -> None:
+        self.plan, self.s, self.scene = plan, session, scene
+        self.policy = policy.for_method(BASELINE_MANIP_ATTEMPTS)
+        self.targets = {p.name: p for p in plan.configuration}
+        self.steps: list[ExecutedStep] = []
+        #: Objects in place, as they were when last judged in place.
+        self.placed: dict[str, ObjectState] = {}
+        #: Objects given up, and why.
+        self.given_up: dict[str, Reason] = {}
+        #: Attempts used per ``(object, action)``.
+        self.used: dict[tuple[str, str], int] = {}
+        #: Each object's place leg, for re-placing it after a disturbance.
+        self.place_legs: dict[str, Step] = {}
+        self.leg: Step | None = None
+        self.turn = 0
+        self.disturbed: list[str] = []
+
+    # -- the plan ---------------------------------------------------------------------
+    def run(self) -> Execution:
+        steps = self.plan.steps
+        for k, step in enumerate(steps):
+            name = step.object or ""
+            if name in self.given_up:
+                continue
+            if step.action == "navigate":
+                nxt = steps[k + 1] if k + 1 < len(steps) else None
+                if nxt is not None and nxt.action == "place":
+                    self.place_legs[name] = step
+                self.leg, self.turn = step, 0
+                assert step.goal is not None
+                if not self.go((step.goal, *step.alternatives), name, step.path):
+                    self.give_up(name, self._last_reason(name, "blocked"))
+            elif step.action == "pick":
+                if not self.pick(name):
+                    self.give_up(name, self._last_reason(name, "grasp_missed"))
+            else:
+                self.place(name)
+                self.replace_disturbed()
+        return self.result()
+
+    def result(self) -> Execution:
+        states = self.s.objects()
+        final = final_placements(states, self.plan.configuration, self.scene)
+        unplaced: list[str] = []
+        reasons: list[tuple[str, Reason]] = []
+        for name in self.plan.order:
+            t = self.targets[name]
+            why = judge(states[name], (t.x, t.y), t.on, self.scene, self.policy)
+            if why is not None:
+                unplaced.append(name)
+                reasons.append((name, self.given_up.get(name, why)))
+        return Execution(tuple(self.steps), final, tuple(unplaced),
+                         round(sum(s.duration_s for s in self.steps), 6), self.s.robot_pose(),
+                         tuple(reasons))
+
+    # -- navigation -------------------------------------------------------------------
+    def go(self, goals: Sequence[Pose2D], name: str, path: Sequence[Point] = ()) -> bool:
+        """Drive to the first of ``goals`` that can be reached within the attempts;
+        the first attempt at the first goal follows ``path``."""
+        for k, goal in enumerate(goals):
+            for attempt in range(1, self.policy.nav_attempts + 1):
+                done = self.s.navigate(goal, path if k == 0 and attempt == 1 else ())
+                self.record(replace(done, object=name or None, goal=goal, attempt=attempt))
+                if done.ok:
+                    return True
+                if done.reason == "blocked" and not done.path:
+                    break  # no path to this goal: the next one
+        return False
+
+    def next_stand(self, name: str) -> bool:
+        """Move to the current leg's next standing position (its fallbacks, then a fresh
+        arrival at the planned one), after an attempt the arm could not reach."""
+        leg = self.leg
+        if leg is None or leg.goal is None:
+            return False
+        stands = (*leg.alternatives, leg.goal)
+        for _ in range(len(stands)):
+            goal = stands[self.turn % len(stands)]
+            self.turn += 1
+            if self.go((goal,), name):
+                return True
+        return False
+
+    # -- manipulation -----------------------------------------------------------------
+    def _left(self, name: str, action: str) -> int:
+        assert self.policy.manip_attempts is not None
+        return self.policy.manip_attempts - self.used.get((name, action), 0)
+
+    def _use(self, name: str, action: str) -> int:
+        n = self.used.get((name, action), 0) + 1
+        self.used[(name, action)] = n
+        return n
+
+    def pick(self, name: str) -> bool:
+        """Pick ``name`` from where it lies, within its pick attempts."""
+        while self._left(name, "pick") > 0:
+            attempt = self._use(name, "pick")
+            done = self.s.pick(name)
+            self.record(replace(done, object=name, attempt=attempt))
+            self.check_placed(name)
+            if done.ok:
+                return True
+            if done.reason is None:
+                return False  # refused: the hand holds something else
+            if done.reason == "no_ik" and not self.next_stand(name):
+                return False
+        return False
+
+    def place(self, name: str) -> bool:
+        """Place the held ``name`` at its target, within its place attempts: re-grasping
+        it where it came to rest when it stands upright on the table, giving it up when
+        it tipped, fell or its attempts ran out."""
+        t = self.targets[name]
+        while self._left(name, "place") > 0:
+            on = self._support(t.on)
+            attempt = self._use(name, "place")
+            done, state = judged_place(self.s, self.scene, name, t.x, t.y, t.yaw, on,
+                                       self.policy)
+            self.record(replace(done, object=name, attempt=attempt))
+            self.check_placed(name)
+            if done.ok:
+                self.placed[name] = state
+                return True
+            if done.reason is None:
+                break
+            if self.s.held == name:
+                # It never left the hand: try again, from elsewhere when out of reach.
+                if done.reason == "no_ik" and not self.next_stand(name):
+                    break
+                continue
+            if done.reason in ("tipped", "fell") or self._left(name, "place") <= 0:
+                self.give_up(name, done.reason)
+                return False
+            if self.disturbed:
+                # Put back what this place moved (its support, say) with the hand empty.
+                self.replace_disturbed()
+                if not self.back_to(name):
+                    self.give_up(name, done.reason)
+                    return False
+            if not self.pick(name):
+                self.give_up(name, done.reason)
+                return False
+        self.give_up(name, self._last_reason(name, "contact"))
+        return False
+
+    def _support(self, on: str | None) -> str | None:
+        """``on`` when that object lies upright on the target table, else ``None``: an
+        object whose support is missing or tipped goes on the table."""
+        state = self.s.objects().get(on or "")
+        if state is None or state.held or state.table != self.scene.target \
+                or state.tilt_rad > self.policy.max_tilt_rad:
+            return None
+        return on
+
+    def back_to(self, name: str) -> bool:
+        """Drive back to where the plan places ``name``."""
+        leg = self.place_legs.get(name)
+        if leg is None or leg.goal is None:
+            return False
+        self.leg, self.turn = leg, 0
+        return self.go((leg.goal, *leg.alternatives), name)
+
+    # -- disturbance ------------------------------------------------------------------
+    def check_placed(self, acting: str) -> None:
+        """Judge the objects in place again after an attempt on ``acting``; report those
+        it moved out of tolerance."""
+        if not self.placed:
+            return
+        states = self.s.objects()
+        for name in list(self.placed):
+            if name == acting:
+                continue
+            t = self.targets[name]
+            why = judge(states[name], (t.x, t.y), self.placed[name].on, self.scene,
+                        self.policy)
+            if why is None:
+                continue
+            del self.placed[name]
+            self.disturbed.append(name)
+            self.record(ExecutedStep(
+                "place", False, 0.0, name, pose=table_pose(states[name], self.scene),
+                attempt=max(1, self.used.get((name, "place"), 1)), reason="disturbed",
+                note=f"moved while handling {acting!r}: {why}"))
+
+    def replace_disturbed(self) -> None:
+        """Put back the objects a later action moved, while their attempts remain."""
+        while self.disturbed:
+            name = self.disturbed.pop(0)
+            if name in self.placed or name in self.given_up:
+                continue
+            states = self.s.objects()
+            state = states[name]
+            carrying = any(s.on == name for s in states.values())
+            if (carrying or state.table is None or state.tilt_rad > self.policy.max_tilt_rad
+                    or min(self._left(name, "pick"), self._left(name, "place")) <= 0
+                    or not self.back_to(name)):
+                self.given_up[name] = "disturbed"
+            elif not self.pick(name):
+                self.give_up(name, "disturbed")
+            else:
+                self.place(name)
+
+    # -- bookkeeping ------------------------------------------------------------------
+    def give_up(self, name: str, reason: Reason) -> None:
+        """Stop working on ``name``: put it down away from the table if it is in hand."""
+        self.given_up[name] = reason
+        if self.s.held == name:
+            spent = self.s.release()
+            if self.steps and spent > 0:
+                last = self.steps[-1]
+                self.steps[-1] = replace(last, duration_s=round(last.duration_s + spent, 6))
+        log.debug("gave up %s: %s", name, reason)
+
+    def _last_reason(self, name: str, default: Reason) -> Reason:
+        """Why the last failed attempt on ``name`` failed (``default``: none says)."""
+        for s in reversed(self.steps):
+            if s.object == name and not s.ok and s.reason is not None:
+                return s.reason
+        return default
+
+    def record(self, step: ExecutedStep) -> None:
+        log.debug("%s %s: %s (%.1f s)", step.action, step.object or "",
+                  "ok" if step.ok else f"failed, {step.reason}: {step.note}", step.duration_s)
+        self.steps.append(step)
+

@@ -1,0 +1,179 @@
+"""The executive alone, over a scripted session: the same outcomes of the primitives give
+the same policy path, whichever simulator would have produced them."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from llm_grop.errors import BadInput
+from llm_grop.execution import ExecutionPolicy, execute_plan
+from llm_grop.planning.grop import build_plan, choose
+from llm_grop.planning.navigation import Navigator
+from llm_grop.planning.utility import PlanningContext
+from llm_grop.world.arrangement import Placement
+from llm_grop.world.catalog import Catalog
+from llm_grop.world.plan import Execution, Plan, Step
+from llm_grop.world.request import items_from_names
+from llm_grop.world.scene import Scene
+from scenes import config, placement, two_table_room
+from scripted_session import SECONDS, ScriptedSession
+
+FLAT = (placement("dinner plate", 0.0, -0.05),
+        placement("dinner fork", -0.22, -0.05, "box", (0.025, 0.2)),
+        placement("dinner knife", 0.22, -0.05, "box", (0.025, 0.2)))
+STACK = (placement("dinner plate", 0.0, -0.05),
+         placement("bread", 0.0, -0.05, "box", (0.1, 0.08), on="dinner plate"))
+
+
+def plan_for(*placements: Placement) -> tuple[Scene, Plan]:
+    scene = two_table_room()
+    ctx = PlanningContext(scene, items_from_names([p.name for p in placements],
+                                                  Catalog.load()))
+    nav = Navigator(scene, scene.robot.base_radius_m)
+    return scene, build_plan(ctx, choose(ctx, [config(*placements)]), nav, seed=0,
+                             configurations=1)
+
+
+def run(placements: tuple[Placement, ...], script: dict[str, list[str]] | None = None,
+        hooks: dict[int, Any] | None = None, **policy: Any
+        ) -> tuple[Execution, ScriptedSession, Plan]:
+    scene, plan = plan_for(*placements)
+    session = ScriptedSession(scene, plan.order, script or {}, hooks or {})
+    ex = execute_plan(plan, session, scene, ExecutionPolicy(**policy))
+    return ex, session, plan
+
+
+def legs(plan: Plan, name: str) -> list[Step]:
+    return [s for s in plan.steps if s.action == "navigate" and s.object == name]
+
+
+def test_every_primitive_succeeding_follows_the_plan_once() -> None:
+    ex, session, plan = run(FLAT)
+    assert [a for a, _ in session.calls] == [s.action for s in plan.steps]
+    # Only the first attempt at a planned goal follows the plan's path.
+    assert all(w.endswith(" path") for a, w in session.calls if a == "navigate")
+    assert ex.success and ex.failures == 0 and ex.unplaced_reasons == ()
+    assert [p.name for p in ex.final] == [p.name for p in plan.configuration]
+    assert all(p.tilt_rad == 0.0 and p.z_m == 0.0 for p in ex.final)
+    assert ex.execution_time_s == pytest.approx(session.time_s) and session.closed
+
+
+def test_navigation_is_retried_then_falls_back_to_the_next_goal() -> None:
+    scene, plan = plan_for(*FLAT)
+    leg = legs(plan, plan.order[0])[1]
+    assert leg.alternatives, "the place leg has fallback standing positions"
+    ex, session, _ = run(FLAT, {"navigate": ["ok", "contact", "contact", "contact", "ok"]})
+    navs = [s for s in ex.steps if s.action == "navigate"][:5]
+    assert [(s.ok, s.attempt, s.reason) for s in navs] == [
+        (True, 1, None), (False, 1, "contact"), (False, 2, "contact"), (False, 3, "contact"),
+        (True, 1, None)]
+    assert navs[4].goal == leg.alternatives[0]
+    # Attempts after the first plan their own path.
+    assert [w.endswith(" path") for a, w in session.calls if a == "navigate"][:5] == [
+        True, True, False, False, False]
+    assert ex.success
+
+
+def test_no_path_skips_to_the_next_goal_at_once() -> None:
+    ex, _, plan = run(FLAT, {"navigate": ["ok", "blocked", "ok"]})
+    navs = [s for s in ex.steps if s.action == "navigate"]
+    assert navs[1].reason == "blocked" and navs[2].goal == legs(plan, plan.order[0])[1] \
+        .alternatives[0]
+    assert ex.success
+
+
+def test_an_unreachable_place_moves_to_the_next_standing_position() -> None:
+    ex, session, plan = run(FLAT, {"place": ["no_ik", "ok"]})
+    first = plan.order[0]
+    assert [a for a, _ in session.calls[:6]] == ["navigate", "pick", "navigate", "place",
+                                                 "navigate", "place"]
+    failed = ex.steps[3]
+    assert failed.reason == "no_ik" and failed.duration_s == SECONDS["no_ik"]
+    assert ex.steps[4].goal == legs(plan, first)[1].alternatives[0]
+    assert ex.steps[5].ok and ex.steps[5].attempt == 2 and ex.success
+
+
+def test_an_object_that_slid_is_regrasped_and_placed_again() -> None:
+    ex, session, plan = run(FLAT, {"place": ["slid", "ok"]})
+    first = plan.order[0]
+    assert session.calls[3:6] == [("place", first), ("pick", first), ("place", first)]
+    slid = ex.steps[3]
+    assert not slid.ok and slid.reason == "slid" and "5.0 cm from its target" in slid.note
+    assert ex.steps[4].action == "pick" and ex.steps[4].attempt == 2
+    assert ex.steps[5].ok and ex.steps[5].attempt == 2
+    assert ex.success
+
+
+@pytest.mark.parametrize("outcome", ["tipped", "fell"])
+def test_a_tipped_or_fallen_object_is_unplaced_and_the_run_fails(outcome: str) -> None:
+    ex, session, plan = run(STACK, {"place": [outcome]})
+    assert plan.order[0] == "dinner plate"
+    assert ex.steps[3].reason == outcome and not ex.steps[3].ok
+    assert ("release", "dinner plate") not in session.calls  # it already left the hand
+    reasons = dict(ex.unplaced_reasons)
+    assert reasons["dinner plate"] == outcome
+    # The bread goes on the table where its plate should be: not on its support.
+    assert reasons["bread"] == "wrong_support"
+    assert not ex.success
+    final = {p.name: p for p in ex.final}
+    if outcome == "tipped":
+        assert final["dinner plate"].tilt_rad == pytest.approx(1.5708, abs=1e-3)
+    else:
+        assert "dinner plate" not in final
+
+
+def test_a_disturbed_object_is_reported_and_placed_again() -> None:
+    scene, plan = plan_for(*FLAT)
+    first, last = plan.order[0], plan.order[-1]
+    # Push the first object 6 cm while the last one is put down.
+    index = [s.action for s in plan.steps].index("place", len(plan.steps) - 1)
+    ex, session, _ = run(FLAT, hooks={index: lambda s: s.move(first, 0.06)})
+    report = next(s for s in ex.steps if s.reason == "disturbed")
+    assert report.object == first and report.action == "place" and not report.ok
+    assert repr(last) in report.note and report.duration_s == 0.0
+    assert session.calls[-3:] == [("navigate", session.calls[-3][1]), ("pick", first),
+                                  ("place", first)]
+    assert ex.success
+
+
+def test_a_disturbed_object_that_carries_another_is_left_and_reported() -> None:
+    scene, plan = plan_for(*STACK)
+    ex, _, _ = run(STACK, hooks={len(plan.steps) - 1: lambda s: (
+        s.move("dinner plate", 0.06), s.move("bread", 0.06))})
+    assert dict(ex.unplaced_reasons)["dinner plate"] == "disturbed"
+    assert not ex.success
+
+
+def test_giving_up_puts_the_object_down_and_keeps_every_second() -> None:
+    ex, session, plan = run(FLAT, {"place": ["contact"] * 10})
+    first = plan.order[0]
+    places = [s for s in ex.steps if s.action == "place" and s.object == first]
+    assert len(places) == 10 and {s.reason for s in places} == {"contact"}
+    assert ("release", first) in session.calls
+    assert dict(ex.unplaced_reasons) == {first: "contact"}
+    assert ex.execution_time_s == pytest.approx(session.time_s)
+    # The rest of the plan goes on.
+    assert set(ex.unplaced) == {first} and len(ex.final) == len(FLAT) - 1
+
+
+@pytest.mark.parametrize(("policy", "attempts"), [
+    ({}, 10), ({"manip_attempts": 4}, 4)])
+def test_attempt_counts(policy: dict[str, int], attempts: int) -> None:
+    ex, _, plan = run(FLAT, {"pick": ["grasp_missed"] * 30}, **policy)
+    picks = [s for s in ex.steps if s.action == "pick" and s.object == plan.order[0]]
+    assert len(picks) == attempts
+
+
+def test_the_method_fills_in_only_a_count_left_open() -> None:
+    assert ExecutionPolicy().for_method(20).manip_attempts == 20
+    assert ExecutionPolicy(manip_attempts=3).for_method(20).manip_attempts == 3
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("nav_attempts", 0), ("manip_attempts", -1), ("max_tilt_rad", -0.1),
+    ("max_offset_m", float("nan"))])
+def test_bad_policy_is_bad_input(field: str, value: float) -> None:
+    with pytest.raises(BadInput, match=field):
+        ExecutionPolicy(**{field: value})  # type: ignore[arg-type]
