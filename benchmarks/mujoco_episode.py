@@ -23,14 +23,20 @@ from llm_grop.simulation.mujoco.simulator import MujocoSimulator
 
 
 class TimedSimulator(MujocoSimulator):
-    """Records the wall time of each execution."""
+    """Records the wall time of each episode's execution, from its session's start to its
+    end."""
 
-    def execute(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+    def session(self, *args, **kwargs):  # type: ignore[no-untyped-def]
         t0 = time.perf_counter()
-        try:
-            return super().execute(*args, **kwargs)
-        finally:
+        session = super().session(*args, **kwargs)
+        close = session.close
+
+        def timed_close() -> None:
+            close()
             self.last_wall_s = time.perf_counter() - t0
+
+        session.close = timed_close  # type: ignore[method-assign]
+        return session
 
 
 def main() -> None:

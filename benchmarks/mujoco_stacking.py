@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 
 from llm_grop import seeds
+from llm_grop.execution import execute
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import PlanningContext
@@ -47,7 +48,8 @@ def main() -> None:
             ctx = PlanningContext(scene, items)
             nav = Navigator(scene, scene.robot.base_radius_m)
             plan = build_plan(ctx, choose(ctx, [cfg]), nav, seed=seed, configurations=1)
-            ex = sim.execute(plan, scene, seeds.stream(seed, "simulator"), replan=nav)
+            ex = execute(sim, plan, scene, items, seeds.stream(seed, "simulator"),
+                         replan=nav)
             final = {p.name: p for p in ex.final}
             if top in final and support in final:
                 placed += 1

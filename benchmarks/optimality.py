@@ -29,11 +29,13 @@ from common import replay_llm
 
 from llm_grop import seeds
 from llm_grop.api import resolve_items, run
+from llm_grop.execution import execute
+from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.planning.grop import Candidate, build_plan, evaluate
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.standing import reach
 from llm_grop.planning.utility import PlanningContext
-from llm_grop.simulation.kinematic2d import Kinematic2D, Kinematic2DOptions
+from llm_grop.simulation.kinematic2d import Kinematic2D
 from llm_grop.world.arrangement import Configuration
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.plan import Plan
@@ -47,7 +49,7 @@ def fastest(ctx: PlanningContext, base: Candidate, *, failures: bool) -> Candida
     robot = ctx.scene.robot
     manip = ctx.model.manipulation(reach(ctx.candidates, ctx.targets_room(placements)).T,
                                    robot)
-    attempts = Kinematic2DOptions().manip_attempts
+    attempts = BASELINE_MANIP_ATTEMPTS
     with np.errstate(divide="ignore", invalid="ignore"):
         place_s = np.where(manip > 0, robot.place_time_s * (1 - (1 - manip) ** attempts)
                            / manip, np.inf)
@@ -79,11 +81,12 @@ def fastest(ctx: PlanningContext, base: Candidate, *, failures: bool) -> Candida
 
 
 def simulate(plan: Plan, ctx: PlanningContext, nav: Navigator, runs: int) -> float:
-    """Mean simulated execution time of ``plan`` over ``runs`` seeds, seconds."""
+    """Mean simulated execution time of ``plan`` over ``runs`` seeds, seconds (the
+    executive with the baselines' attempt counts)."""
     sim = Kinematic2D()
     return statistics.fmean(
-        sim.execute(plan, ctx.scene, seeds.stream(seed, "simulator"), replan=nav
-                    ).execution_time_s for seed in range(runs))
+        execute(sim, plan, ctx.scene, ctx.items, seeds.stream(seed, "simulator"), replan=nav
+                ).execution_time_s for seed in range(runs))
 
 
 def main() -> None:

@@ -123,9 +123,9 @@ class ScriptedSession:
             self.states[name] = ObjectState(name, q.x, q.y - 0.6, 0.0, q.theta, math.pi / 2)
         return self._done(ExecutedStep("place", True, SECONDS["place"], name))
 
-    def release(self) -> float:
-        self.calls.append(("release", self.hand or ""))
-        if self.hand is not None:
+    def release(self, name: str) -> float:
+        self.calls.append(("release", name))
+        if self.hand == name:
             self.states[self.hand] = ObjectState(self.hand, self.pose.x, self.pose.y, 0.0,
                                                  0.0, math.pi / 2)
             self.hand = None

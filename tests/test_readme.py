@@ -58,3 +58,39 @@ def test_every_python_example_runs(chat_server, tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr[-3000:]
     assert (tmp_path / "run.png").stat().st_size > 0
     assert chat_server.requests, "the openai example never reached the server"
+
+
+def _block(name: str) -> str:
+    text = README.read_text()
+    m = re.search(rf"<!-- run example: {name} -->\n```\w*\n(.*?)```", text, flags=re.S)
+    assert m, f"README.md has no 'run example: {name}' block"
+    return m[1]
+
+
+def test_run_example_console_and_json_agree_with_each_other_and_a_fresh_run(
+        tmp_path: Path) -> None:
+    """The README's run example: its console and its JSON excerpt come from one run, and the
+    README's command (the embedded model's answers replayed) still gives that run."""
+    from llm_grop.cli import main
+
+    console, excerpt = _block("console"), _block("json")
+    config = re.search(r"configuration (\d+) of (\d+)", console)
+    result = re.search(r"Result: (\w+); execution time ([\d.]+) s .*?; failures (\d+)",
+                       console)
+    assert config and result
+    number = lambda key: re.search(rf'"{key}": ([\d.]+)', excerpt)[1]  # noqa: E731
+    assert int(config[1]) == int(number("configuration_index")) + 1
+    assert int(config[2]) == int(number("configurations"))
+    assert result[1] == ("success" if '"success": true' in excerpt else "failed")
+    assert result[2] == f"{float(number('execution_time_s')):.1f}"
+    assert result[3] == number("failures")
+    out = tmp_path / "run.json"
+    recording = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / \
+        "embedded_calls.jsonl"
+    assert main(["run", "--task", "8", "--llm", "replay", "--replay", str(recording),
+                 "--json", str(out), "-q"]) == 0
+    run = json.loads(out.read_text())
+    assert run["plan"]["configuration_index"] == int(number("configuration_index"))
+    assert run["execution_time_s"] == float(number("execution_time_s"))
+    assert run["failures"] == int(number("failures"))
+    assert json.dumps(run["steps"][0]["goal"]) in excerpt

@@ -177,3 +177,53 @@ def test_the_method_fills_in_only_a_count_left_open() -> None:
 def test_bad_policy_is_bad_input(field: str, value: float) -> None:
     with pytest.raises(BadInput, match=field):
         ExecutionPolicy(**{field: value})  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(("field", "value"), [
+    ("nav_attempts", True), ("max_offset_m", float("inf")), ("max_tilt_rad", "0.3")])
+def test_policy_values_of_the_wrong_kind_are_bad_input(field: str, value: object) -> None:
+    with pytest.raises(BadInput, match=field):
+        ExecutionPolicy(**{field: value})  # type: ignore[arg-type]
+
+
+def test_a_given_up_object_is_put_down_off_the_table_and_its_time_kept() -> None:
+    """The release's seconds go to the object given up, not to another's report."""
+    scene, plan = plan_for(*FLAT)
+    first, second = plan.order[0], plan.order[1]
+    index = [k for k, s in enumerate(plan.steps) if s.action == "place"][1]
+    hooks = {index + 1: lambda s: s.move(first, 0.06)}
+    ex, session, _ = run(FLAT, {"place": ["ok", "contact", "contact"]}, hooks,
+                         manip_attempts=2)
+    assert dict(ex.unplaced_reasons).get(second) == "contact"
+    released = [s for s in ex.steps if s.object == second][-1]
+    assert released.duration_s == SECONDS["place"] + SECONDS["release"]
+    assert all(s.duration_s == 0.0 for s in ex.steps if s.reason == "disturbed")
+    assert ex.execution_time_s == pytest.approx(session.time_s)
+
+
+def test_a_disturbed_object_is_put_back_even_when_the_one_that_moved_it_is_given_up() -> None:
+    scene, plan = plan_for(*FLAT)
+    first, last = plan.order[0], plan.order[-1]
+    pick = [k for k, s in enumerate(plan.steps) if s.action == "pick"][-1]
+    ex, session, _ = run(FLAT, {"pick": ["ok", "ok", "grasp_missed"] + ["grasp_missed"] * 9},
+                         hooks={pick: lambda s: s.move(first, 0.06)})
+    assert dict(ex.unplaced_reasons) == {last: "grasp_missed"}
+    assert session.calls[-2:] == [("pick", first), ("place", first)]
+
+
+def test_the_last_unreachable_attempt_does_not_drive_anywhere() -> None:
+    ex, session, plan = run(FLAT, {"place": ["no_ik"] * 50}, manip_attempts=3)
+    first = plan.order[0]
+    k = session.calls.index(("place", first))
+    tail = session.calls[k:session.calls.index(("release", first))]
+    assert [a for a, _ in tail] == ["place", "navigate", "place", "navigate", "place"]
+
+
+def test_an_object_knocked_over_is_not_picked_again() -> None:
+    scene, plan = plan_for(*FLAT)
+    first = plan.order[0]
+    pick = [s.action for s in plan.steps].index("pick")
+    ex, session, _ = run(FLAT, {"pick": ["grasp_missed"]},
+                         hooks={pick: lambda s: s.move(first, 0.0, tilt_rad=1.5)})
+    assert session.calls.count(("pick", first)) == 1
+    assert dict(ex.unplaced_reasons)[first] == "tipped"

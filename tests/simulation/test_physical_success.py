@@ -91,8 +91,8 @@ class Tipping:
     def pick(self, name: str) -> ExecutedStep:
         return self.inner.pick(name)
 
-    def release(self) -> float:
-        return self.inner.release()
+    def release(self, name: str) -> float:
+        return self.inner.release(name)
 
     def close(self) -> None:
         self.inner.close()

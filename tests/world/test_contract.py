@@ -84,6 +84,23 @@ def test_run_json_is_valid(run_json: dict[str, Any]) -> None:
     assert RunDoc.model_validate(later).to_json() == later
 
 
+def test_run_json_from_before_the_executive_still_reads(run_json: dict[str, Any]) -> None:
+    """A 0.8 run JSON: no reasons, heights, tilts or ``ik_failure_s``."""
+    old = json.loads(json.dumps(run_json))
+    old.pop("unplaced_reasons")
+    old["scene"]["robot"].pop("ik_failure_s")
+    for step in old["steps"]:
+        step.pop("reason", None)
+    for o in old["final"]["objects"]:
+        o.pop("z_m"), o.pop("tilt_rad")
+    _validate("run", old)
+    assert RunDoc.model_validate(old).to_json() == old
+    final = arrangement_from_dict(old["final"])
+    assert all(p.z_m == 0.0 and p.tilt_rad == 0.0 and p.upright for p in final.placements)
+    assert {o["name"] for o in run_json["final"]["objects"]} == \
+        {p.name for p in final.placements}
+
+
 def test_arrangement_reads_back(run_json: dict[str, Any]) -> None:
     planned = arrangement_from_dict(run_json["planned"])
     again = arrangement_to_dict(planned)

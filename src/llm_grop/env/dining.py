@@ -16,9 +16,10 @@ rest on the target table; ``chairs`` one row ``(x, y, width, depth, yaw)`` per s
 chair; and with ``camera=True`` ``image``, the room seen from above (a render in 3D
 simulators, a drawing in 2D ones).
 
-Reward: objects that newly rest on the target table count +1 each (an object taken off it
--1), and time costs 1 per 100 simulated seconds. The episode terminates when every object
-rests on the target table and is truncated after ``max_steps`` actions.
+Reward: objects that newly rest upright on the target table count +1 each (an object taken
+off it, or knocked over, -1), and time costs 1 per 100 simulated seconds. The episode
+terminates when every object rests upright on the target table and is truncated after
+``max_steps`` actions.
 """
 
 from __future__ import annotations
@@ -186,7 +187,8 @@ class DiningRoomEnv(gymnasium.Env):
     def _resting(self) -> set[str]:
         assert self.session is not None and self.episode_scene is not None
         target = self.episode_scene.target
-        return {n for n, s in self.session.objects().items() if s.table == target and not s.held}
+        return {n for n, s in self.session.objects().items()
+                if s.table == target and not s.held and s.tilt_rad <= self.policy.max_tilt_rad}
 
     def _observe(self) -> dict[str, Any]:
         assert self.session is not None and self.episode_scene is not None

@@ -94,16 +94,20 @@ class _Executive:
                 nxt = steps[k + 1] if k + 1 < len(steps) else None
                 if nxt is not None and nxt.action == "place":
                     self.place_legs[name] = step
-                self.leg, self.turn = step, 0
                 assert step.goal is not None
-                if not self.go((step.goal, *step.alternatives), name, step.path):
+                if not self.go_leg(step, step.path):
                     self.give_up(name, self._last_reason(name, "blocked"))
             elif step.action == "pick":
-                if not self.pick(name):
-                    self.give_up(name, self._last_reason(name, "grasp_missed"))
+                why = self.pick(name)
+                if why is not None:
+                    self.give_up(name, why)
             else:
                 self.place(name)
+            # Disturbed objects are put back between deliveries, with the hand empty.
+            if (step.action == "place" or name in self.given_up) and self.s.held is None:
                 self.replace_disturbed()
+        if self.s.held is None:
+            self.replace_disturbed()
         return self.result()
 
     def result(self) -> Execution:
@@ -122,18 +126,31 @@ class _Executive:
                          tuple(reasons))
 
     # -- navigation -------------------------------------------------------------------
-    def go(self, goals: Sequence[Pose2D], name: str, path: Sequence[Point] = ()) -> bool:
-        """Drive to the first of ``goals`` that can be reached within the attempts;
-        the first attempt at the first goal follows ``path``."""
+    def go(self, goals: Sequence[Pose2D], name: str, path: Sequence[Point] = ()
+           ) -> int | None:
+        """Drive to the first of ``goals`` that can be reached within the attempts (the
+        first attempt at the first goal follows ``path``); the index of the goal reached,
+        ``None`` when none was."""
         for k, goal in enumerate(goals):
             for attempt in range(1, self.policy.nav_attempts + 1):
                 done = self.s.navigate(goal, path if k == 0 and attempt == 1 else ())
                 self.record(replace(done, object=name or None, goal=goal, attempt=attempt))
+                self.check_placed(name)
                 if done.ok:
-                    return True
+                    return k
                 if done.reason == "blocked" and not done.path:
                     break  # no path to this goal: the next one
-        return False
+        return None
+
+    def go_leg(self, leg: Step, path: Sequence[Point] = ()) -> bool:
+        """Drive to ``leg``'s goal or one of its fallbacks, and make it the leg whose
+        standing positions an unreachable attempt moves between."""
+        assert leg.goal is not None
+        reached = self.go((leg.goal, *leg.alternatives), leg.object or "", path)
+        # Standing positions cycle fallbacks first, then the planned goal: start after the
+        # one reached.
+        self.leg, self.turn = leg, 0 if reached is None else reached
+        return reached is not None
 
     def next_stand(self, name: str) -> bool:
         """Move to the current leg's next standing position (its fallbacks, then a fresh
@@ -145,7 +162,7 @@ class _Executive:
         for _ in range(len(stands)):
             goal = stands[self.turn % len(stands)]
             self.turn += 1
-            if self.go((goal,), name):
+            if self.go((goal,), name) is not None:
                 return True
         return False
 
@@ -159,20 +176,29 @@ class _Executive:
         self.used[(name, action)] = n
         return n
 
-    def pick(self, name: str) -> bool:
-        """Pick ``name`` from where it lies, within its pick attempts."""
+    def pick(self, name: str) -> Reason | None:
+        """Pick ``name`` from where it lies, within its pick attempts: ``None`` when it is
+        in the hand, else why not (one that tipped or fell is not tried again)."""
+        why: Reason = "grasp_missed"
         while self._left(name, "pick") > 0:
+            state = self.s.objects()[name]
+            if state.table is None:
+                return "fell"
+            if state.tilt_rad > self.policy.max_tilt_rad:
+                return "tipped"
             attempt = self._use(name, "pick")
             done = self.s.pick(name)
             self.record(replace(done, object=name, attempt=attempt))
             self.check_placed(name)
             if done.ok:
-                return True
+                return None
             if done.reason is None:
-                return False  # refused: the hand holds something else
-            if done.reason == "no_ik" and not self.next_stand(name):
-                return False
-        return False
+                raise RuntimeError(f"the simulator refused to pick {name!r}: {done.note}")
+            why = done.reason
+            if done.reason == "no_ik" and self._left(name, "pick") > 0 \
+                    and not self.next_stand(name):
+                break
+        return why
 
     def place(self, name: str) -> bool:
         """Place the held ``name`` at its target, within its place attempts: re-grasping
@@ -190,13 +216,15 @@ class _Executive:
                 self.placed[name] = state
                 return True
             if done.reason is None:
-                break
-            if self.s.held == name:
+                raise RuntimeError(f"the simulator refused to place {name!r}: {done.note}")
+            if state.held:
                 # It never left the hand: try again, from elsewhere when out of reach.
-                if done.reason == "no_ik" and not self.next_stand(name):
+                if done.reason == "no_ik" and self._left(name, "place") > 0 \
+                        and not self.next_stand(name):
                     break
                 continue
-            if done.reason in ("tipped", "fell") or self._left(name, "place") <= 0:
+            if (done.reason in ("tipped", "fell") or state.table != self.scene.target
+                    or self._left(name, "place") <= 0):
                 self.give_up(name, done.reason)
                 return False
             if self.disturbed:
@@ -205,7 +233,7 @@ class _Executive:
                 if not self.back_to(name):
                     self.give_up(name, done.reason)
                     return False
-            if not self.pick(name):
+            if self.pick(name) is not None:
                 self.give_up(name, done.reason)
                 return False
         self.give_up(name, self._last_reason(name, "contact"))
@@ -223,10 +251,7 @@ class _Executive:
     def back_to(self, name: str) -> bool:
         """Drive back to where the plan places ``name``."""
         leg = self.place_legs.get(name)
-        if leg is None or leg.goal is None:
-            return False
-        self.leg, self.turn = leg, 0
-        return self.go((leg.goal, *leg.alternatives), name)
+        return leg is not None and leg.goal is not None and self.go_leg(leg)
 
     # -- disturbance ------------------------------------------------------------------
     def check_placed(self, acting: str) -> None:
@@ -263,7 +288,7 @@ class _Executive:
                     or min(self._left(name, "pick"), self._left(name, "place")) <= 0
                     or not self.back_to(name)):
                 self.given_up[name] = "disturbed"
-            elif not self.pick(name):
+            elif self.pick(name) is not None:
                 self.give_up(name, "disturbed")
             else:
                 self.place(name)
@@ -272,11 +297,15 @@ class _Executive:
     def give_up(self, name: str, reason: Reason) -> None:
         """Stop working on ``name``: put it down away from the table if it is in hand."""
         self.given_up[name] = reason
-        if self.s.held == name:
-            spent = self.s.release()
-            if self.steps and spent > 0:
-                last = self.steps[-1]
-                self.steps[-1] = replace(last, duration_s=round(last.duration_s + spent, 6))
+        if self.s.objects()[name].held:
+            spent = self.s.release(name)
+            mine = [k for k, s in enumerate(self.steps)
+                    if s.object == name and s.reason != "disturbed"]
+            if mine and spent > 0:
+                last = self.steps[mine[-1]]
+                self.steps[mine[-1]] = replace(last,
+                                               duration_s=round(last.duration_s + spent, 6))
+            self.check_placed(name)
         log.debug("gave up %s: %s", name, reason)
 
     def _last_reason(self, name: str, default: Reason) -> Reason:

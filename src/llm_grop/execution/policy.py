@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 from llm_grop.errors import BadInput
@@ -41,11 +42,14 @@ class ExecutionPolicy:
     def __post_init__(self) -> None:
         for name in ("nav_attempts", "manip_attempts"):
             value = getattr(self, name)
-            if value is not None and (not isinstance(value, int) or value < 1):
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int)
+                                      or value < 1):
                 raise BadInput(f"{name}: must be a whole number of at least 1, got {value!r}")
         for name in ("max_tilt_rad", "max_offset_m", "rest_m"):
-            if not getattr(self, name) >= 0:
-                raise BadInput(f"{name}: must not be negative, got {getattr(self, name)!r}")
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) \
+                    or not math.isfinite(value) or value < 0:
+                raise BadInput(f"{name}: must be a finite number, not negative, got {value!r}")
 
     def for_method(self, manip_attempts: int) -> ExecutionPolicy:
         """This policy with ``manip_attempts`` filled in when it was left to the method."""

@@ -76,9 +76,9 @@ class Session(Protocol):
         let go there; where the object then came to rest is read from :meth:`objects`."""
         ...
 
-    def release(self) -> float:
-        """Give up what the hand holds: put it down away from the target table (on the
-        floor). The simulated seconds it took."""
+    def release(self, name: str) -> float:
+        """Give up ``name`` if the hand holds it: put it down away from the target table (on
+        the floor). The simulated seconds it took."""
         ...
 
     def close(self) -> None:

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from llm_grop.errors import BadInput
 from llm_grop.geometry.motion import leg_duration_s, path_length_m, path_prefix
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner
@@ -40,8 +41,9 @@ log = logging.getLogger(__name__)
 CARRY_Z_M = 1.1
 #: Tilt of an object that tipped over onto its side, radians.
 TIPPED_RAD = math.pi / 2
-#: Where a released object falls, in front of the base (metres along its heading).
-DROP_AHEAD_M = 0.45
+#: Where a given-up object falls: beside the base, this far to its left or right (metres),
+#: clear of the tables, as the 3D arm lowers it.
+DROP_SIDE_M = 0.5
 
 
 @dataclass(frozen=True)
@@ -70,6 +72,18 @@ class Kinematic2DOptions:
         ("contact", 0.5), ("slid", 0.35), ("tipped", 0.1), ("fell", 0.05))
     slide_m: tuple[float, float] = (0.04, 0.10)
     outcomes: Outcomes = field(default_factory=ParametricOutcomes)
+
+    def __post_init__(self) -> None:
+        kinds = ("contact", "slid", "tipped", "fell")
+        for reason, weight in self.place_failures:
+            if reason not in kinds:
+                raise BadInput(f"place_failures: {reason!r} is not a way a place fails in 2D; "
+                               f"use {', '.join(kinds)}")
+            if not (isinstance(weight, int | float) and math.isfinite(weight) and weight >= 0):
+                raise BadInput(f"place_failures: the weight of {reason!r} must be a finite "
+                               f"number, not negative, got {weight!r}")
+        if not sum(w for _, w in self.place_failures) > 0:
+            raise BadInput("place_failures: needs at least one positive weight")
 
 
 class Kinematic2D:
@@ -265,15 +279,22 @@ class Kinematic2DSession:
             self.states[name] = ObjectState(name, x, y, 0.0, yaw, TIPPED_RAD)
 
     def _drop(self, name: str) -> None:
-        """``name`` falls to the floor in front of the base."""
+        """``name`` falls to the floor beside the base, on the first side clear of the
+        tables (under the base when neither is)."""
         self.carried.remove(name)
         p = self.pose
-        self.states[name] = ObjectState(name, p.x + DROP_AHEAD_M * math.cos(p.theta),
-                                        p.y + DROP_AHEAD_M * math.sin(p.theta), 0.0, p.theta,
-                                        TIPPED_RAD)
+        x, y = p.x, p.y
+        for side in (1.0, -1.0):
+            sx = p.x - side * DROP_SIDE_M * math.sin(p.theta)
+            sy = p.y + side * DROP_SIDE_M * math.cos(p.theta)
+            if not any(t.contains(sx, sy) for t in self.scene.tables):
+                x, y = sx, sy
+                break
+        self.states[name] = ObjectState(name, x, y, 0.0, p.theta, TIPPED_RAD)
 
-    def release(self) -> float:
-        """Put the held object down on the floor in front of the base (no time in 2D)."""
-        if self.carried:
-            self._drop(self.carried[-1])
+    def release(self, name: str) -> float:
+        """Put ``name`` down on the floor in front of the base if it is carried (no time in
+        2D)."""
+        if name in self.carried:
+            self._drop(name)
         return 0.0

@@ -28,9 +28,9 @@ from llm_grop.world.plan import Reason
 APPROACH_M = 0.10
 #: An object is released this high above its surface (metres).
 DROP_M = 0.006
-#: Where the hand lets go of an abandoned object: in front of the base, below any table
-#: top (base frame, metres).
-DROP_POINT = (0.45, 0.0, 0.45)
+#: Where the hand lets go of an abandoned object: beside the base, left then right, below
+#: any table top and clear of the table the robot faces (base frame, metres).
+DROP_POINTS = ((0.0, 0.5, 0.4), (0.0, -0.5, 0.4))
 
 
 @dataclass(frozen=True)
@@ -132,13 +132,15 @@ def place(w: World, name: str, x: float, y: float, yaw: float, support: str) -> 
 
 
 def release(w: World) -> None:
-    """Give up what the hand holds: lower it in front of the base, below table height, and
-    let go (it falls to the floor, not onto a table already set)."""
+    """Give up what the hand holds: lower it beside the base, below table height, and let
+    go (it falls to the floor, not onto the table the robot faces)."""
     if w.held is None:
         return
-    low = w.ik.solve(DROP_POINT, _hand_yaw(w), w.arm_q(), elbow_up=False)
-    if low.ok:
-        w.move_arm(low.q, at_surface=True)
+    for point in DROP_POINTS:
+        low = w.ik.solve(point, _hand_yaw(w), w.arm_q(), elbow_up=False)
+        if low.ok:
+            w.move_arm(low.q, at_surface=True)
+            break
     _weld(w, w.held, False)
     w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.3)
     w.move_arm(w.ik.carry(), at_surface=True)

@@ -62,16 +62,24 @@ class MujocoSession:
         out = {}
         for name in self.names:
             p = self.w.object_pose(name)
-            # A berry has no up axis: any way up is upright.
-            tilt = 0.0 if self.w.wm.objects[name].style == "berry" else p.tilt
+            x, y, z, tilt = p.x, p.y, p.z, p.tilt
+            item = self.w.wm.objects[name]
+            if item.style == "berry":
+                # A berry has no up axis: any way up is upright, and where it lies is its
+                # centre, whichever way it rolled.
+                body = self.w.d.body(name)
+                c = body.xpos + body.xmat.reshape(3, 3) @ np.array([0.0, 0.0, item.height / 2])
+                x, y, z, tilt = float(c[0]), float(c[1]), float(c[2]) - item.height / 2, 0.0
+            held = name == self.w.held
             table = None
             for t in self.scene.tables:
                 top = self.w.top_z(t.name)
-                if t.contains(p.x, p.y) and top - ON_TABLE_BELOW_M <= p.z <= top + ON_TABLE_ABOVE_M:
+                if not held and t.contains(x, y) \
+                        and top - ON_TABLE_BELOW_M <= z <= top + ON_TABLE_ABOVE_M:
                     table = t.name
                     break
-            out[name] = ObjectState(name, p.x, p.y, p.z, p.yaw, tilt, table,
-                                    self.w.support_of(name), held=name == self.w.held)
+            out[name] = ObjectState(name, x, y, z, p.yaw, tilt, table,
+                                    self.w.support_of(name), held=held)
         return out
 
     def picture(self, view: View = "room", size: tuple[int, int] | None = None) -> np.ndarray:
@@ -159,10 +167,11 @@ class MujocoSession:
             "place", result.ok, 0.0, name, standing=standing, reason=result.reason,
             note="" if result.ok else f"place failed: {result.note}"))
 
-    def release(self) -> float:
-        """Lower what the hand holds in front of the base and let it fall to the floor;
-        the simulated seconds it took."""
-        manipulation.release(self.w)
+    def release(self, name: str) -> float:
+        """Lower ``name``, if the hand holds it, in front of the base and let it fall to
+        the floor; the simulated seconds it took."""
+        if self.w.held == name:
+            manipulation.release(self.w)
         now = float(self.w.d.time)
         spent, self.mark = now - self.mark, now
         return round(spent, 6)

@@ -62,6 +62,9 @@ class MujocoSimulator:
         """:class:`BadInput` when this scene or these objects cannot be simulated (called
         before planning, so bad input costs no work)."""
         check_scene(scene)
+        if scene.robot.capacity != 1:
+            raise BadInput(f"scene {scene.name!r}: robot.capacity: the 3D robot has one "
+                           f"gripper and carries 1 object, got {scene.robot.capacity}")
         for item in items:
             tableware(item_placement(item))
 
