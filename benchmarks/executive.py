@@ -38,6 +38,14 @@ BEFORE = (("src/llm_grop/simulation/kinematic2d.py", ("Kinematic2D.execute", "Ru
 AFTER = (("src/llm_grop/execution/executive.py", ()),
          ("src/llm_grop/execution/judge.py", ()),
          ("src/llm_grop/execution/policy.py", ()))
+#: Every file that executes plans, policy and primitives together, before and after.
+_SIM = "src/llm_grop/simulation"
+FILES_BEFORE = (f"{_SIM}/kinematic2d.py", f"{_SIM}/mujoco/episode.py",
+                f"{_SIM}/mujoco/session.py", f"{_SIM}/mujoco/simulator.py",
+                f"{_SIM}/mujoco/manipulation.py")
+FILES_AFTER = (f"{_SIM}/kinematic2d.py", f"{_SIM}/mujoco/session.py",
+               f"{_SIM}/mujoco/simulator.py", f"{_SIM}/mujoco/manipulation.py",
+               *(path for path, _ in AFTER))
 #: The tolerances success is checked against, independently of the executive's own.
 MAX_TILT_RAD, MAX_OFFSET_M = 0.35, 0.03
 
@@ -71,12 +79,19 @@ def code_lines(source: str, names: tuple[str, ...]) -> int:
 
 
 def lines(before: str) -> None:
-    old = sum(code_lines(subprocess.run(["git", "show", f"{before}:{path}"], cwd=ROOT,
-                                        check=True, capture_output=True, text=True).stdout,
-                         names) for path, names in BEFORE)
+    old = sum(code_lines(_show(before, path), names) for path, names in BEFORE)
     new = sum(code_lines((ROOT / path).read_text(), names) for path, names in AFTER)
     print(f"lines of execution logic: {old} at {before} (two copies, one per simulator), "
           f"{new} now (one executive)")
+    old_all = sum(code_lines(_show(before, path), ()) for path in FILES_BEFORE)
+    new_all = sum(code_lines((ROOT / path).read_text(), ()) for path in FILES_AFTER)
+    print(f"lines of the simulators' execution files and the executive together: {old_all} at "
+          f"{before}, {new_all} now")
+
+
+def _show(rev: str, path: str) -> str:
+    return subprocess.run(["git", "show", f"{rev}:{path}"], cwd=ROOT, check=True,
+                          capture_output=True, text=True).stdout
 
 
 def _false_success(row: dict[str, Any]) -> bool:
