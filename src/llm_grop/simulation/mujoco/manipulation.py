@@ -6,13 +6,10 @@ pose (after the robot's ``ik_failure_s`` of planning), when the arm or what it h
 touches furniture, or when the pads close on nothing. Where a released object comes to
 rest (upright or tipped, on its support or not) is for the executive to judge.
 
-Holding follows the attach semantics of Gazebo's grasp-fix plugin: a weld between hand and
-object switches on only when both pads press on the object with normal forces of at least
-:data:`GRIP_FORCE_N` whose directions differ by at least :data:`GRIP_ANGLE_DEG` (they
-squeeze it from opposite sides), for :data:`GRIP_CHECKS` control steps in a row; pads that
-touch without squeezing miss the grasp. It switches off at release. Thin cutlery and plate
-rims are too small for MuJoCo's soft contacts to hold by friction through a drive across
-the room, hence the weld.
+Holding uses a contact-triggered weld: when both pads touch the object after closing, a
+weld between hand and object switches on, and it switches off at release. Thin cutlery and
+plate rims are too small for MuJoCo's soft contacts to hold through a drive across the room,
+so every object is held this way; the pads must still reach and touch it.
 """
 
 from __future__ import annotations
@@ -24,7 +21,7 @@ import mujoco
 import numpy as np
 
 from llm_grop.simulation.mujoco.tableware import MAX_OPENING_M
-from llm_grop.simulation.mujoco.world import CONTROL_STEPS, World
+from llm_grop.simulation.mujoco.world import World
 from llm_grop.world.plan import Reason
 
 #: Height of the pre-grasp and pre-place poses above the grasp (metres).
@@ -34,16 +31,6 @@ DROP_M = 0.006
 #: Where the hand lets go of an abandoned object: beside the base, left then right, below
 #: any table top and clear of the table the robot faces (base frame, metres).
 DROP_POINTS = ((0.0, 0.5, 0.4), (0.0, -0.5, 0.4))
-
-
-#: Smallest normal force, newtons, with which each pad must press on a held object (a
-#: squeezed one takes 4-27 N from the finger actuators).
-GRIP_FORCE_N = 2.0
-#: Smallest angle, degrees, between the two pads' forces on the object (grasp-fix's
-#: ``forces_angle_tolerance``): roughly opposing.
-GRIP_ANGLE_DEG = 120.0
-#: Control steps (0.04 s each) in a row the grip must hold to attach.
-GRIP_CHECKS = 5
 
 
 @dataclass(frozen=True)
@@ -94,11 +81,10 @@ def pick(w: World, name: str) -> Attempt:
     note = w.move_arm(q_above) or w.move_arm(q_at, speed_radps=0.6, at_surface=True)
     if note:
         return _abort(w, t0, note)
-    # Squeeze for 0.4 s in all: the grip is checked over the last GRIP_CHECKS steps.
-    w.set_fingers(0.0, 0.4 - GRIP_CHECKS * CONTROL_STEPS * w.m.opt.timestep)
-    if not _holds_grip(w, name):
+    w.set_fingers(0.0, 0.4)
+    if not all(_touches(w, w.pads[side], name) for side in ("left", "right")):
         w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
-        return _abort(w, t0, "the pads do not squeeze it", "grasp_missed")
+        return _abort(w, t0, "the pads closed on nothing", "grasp_missed")
     _weld(w, name, True)
     note = w.move_arm(q_above, speed_radps=0.6, at_surface=True) \
         or w.move_arm(w.ik.carry())
@@ -184,43 +170,14 @@ def _hand_yaw(w: World) -> float:
     return math.atan2(float(x[1]), float(x[0])) - w.base_pose().theta
 
 
-def pad_force(w: World, side: str, name: str) -> np.ndarray:
-    """The normal force, newtons (world frame), that the ``side`` pad exerts on ``name``."""
-    total = np.zeros(3)
-    f = np.zeros(6)
-    pads, owner = w.pads[side], w.wm.owner
-    for k in range(w.d.ncon):
-        c = w.d.contact[k]
-        g1, g2 = int(c.geom[0]), int(c.geom[1])
-        # The contact normal points from geom1 to geom2, the way geom1 pushes geom2.
-        if g1 in pads and owner[g2] == name:
-            sign = 1.0
-        elif g2 in pads and owner[g1] == name:
-            sign = -1.0
-        else:
-            continue
-        mujoco.mj_contactForce(w.m, w.d, k, f)
-        total += sign * f[0] * c.frame[:3]
-    return total
-
-
-def gripped(w: World, name: str) -> bool:
-    """Whether both pads squeeze ``name`` now: each presses with at least
-    :data:`GRIP_FORCE_N`, the two forces at least :data:`GRIP_ANGLE_DEG` apart."""
-    left, right = pad_force(w, "left", name), pad_force(w, "right", name)
-    nl, nr = float(np.linalg.norm(left)), float(np.linalg.norm(right))
-    if min(nl, nr) < GRIP_FORCE_N:
+def _touches(w: World, geoms: np.ndarray, name: str) -> bool:
+    n = w.d.ncon
+    if n == 0:
         return False
-    return float(left @ right) / (nl * nr) <= math.cos(math.radians(GRIP_ANGLE_DEG))
-
-
-def _holds_grip(w: World, name: str) -> bool:
-    """Whether the grip holds for :data:`GRIP_CHECKS` control steps in a row."""
-    for _ in range(GRIP_CHECKS):
-        if not gripped(w, name):
-            return False
-        w.advance(0.0)
-    return True
+    pairs = w.d.contact.geom[:n]
+    owner = w.wm.owner
+    return any((a in geoms and owner[b] == name) or (b in geoms and owner[a] == name)
+               for a, b in pairs)
 
 
 def _weld(w: World, name: str, on: bool) -> None:
