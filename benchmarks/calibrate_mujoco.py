@@ -3,7 +3,7 @@
 Measures manipulation success against planned reach and navigation success against goal
 clearance in the 3D world (with its arrival noise), fits the parametric model by maximum
 likelihood, and prints measured rates beside the ``default`` profile's and the fitted
-model's predictions. ``--write`` stores the fit in src/llm_grop/planning/feasibility.yaml.
+model's predictions. ``--write`` stores the fit in src/llm_grop/data/feasibility.yaml.
 Run: .venv/bin/python benchmarks/calibrate_mujoco.py [--trials 24] [--write]
 """
 
@@ -28,7 +28,7 @@ from llm_grop.planning.feasibility import feasibility_profile
 from llm_grop.simulation.mujoco.simulator import MujocoSimulator
 from llm_grop.world.robot import Robot
 
-PROFILES = Path(__file__).resolve().parents[1] / "src/llm_grop/planning/feasibility.yaml"
+PROFILES = Path(__file__).resolve().parents[1] / "src/llm_grop/data/feasibility.yaml"
 REACHES = [0.40, 0.50, 0.60, 0.70, 0.75, 0.80, 0.85, 0.90, 0.95, 1.00, 1.05, 1.10, 1.15,
            1.20, 1.30]
 CLEARANCES = [0.0, 0.02, 0.04, 0.06, 0.08, 0.10, 0.15, 0.20, 0.30, 0.45]

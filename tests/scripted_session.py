@@ -21,7 +21,8 @@ SECONDS = {"navigate": 10.0, "pick": 8.0, "place": 8.0, "no_ik": 2.0, "release":
 
 @dataclass
 class ScriptedSession:
-    """Outcomes per action, consumed in order: ``"ok"``, or a reason. For ``place``:
+    """Outcomes per action, consumed in order: ``"ok"``, or a reason (``navigate`` may also
+    be ``dropped``: the held object falls to the floor on the way). For ``place``:
     ``contact`` and ``no_ik`` keep the object in the hand; ``slid``, ``tipped`` and
     ``fell`` let go and leave it 5 cm off, on its side, or on the floor. ``hooks`` run
     after the call with that index (0-based) and may move objects."""
@@ -85,6 +86,13 @@ class ScriptedSession:
         if outcome == "blocked":
             return self._done(ExecutedStep("navigate", False, 0.0, goal=goal, note="no path",
                                            reason="blocked"))
+        if outcome == "dropped" and self.hand is not None:
+            # The held object slips from the hand on the way and lands on the floor.
+            name, self.hand, self.pose = self.hand, None, goal
+            self.states[name] = ObjectState(name, goal.x, goal.y, 0.0, 0.0)
+            return self._done(ExecutedStep("navigate", False, SECONDS["navigate"], goal=goal,
+                                           path=((0.0, 0.0), (goal.x, goal.y)),
+                                           reason="fell", note=f"dropped {name!r} in transit"))
         return self._done(ExecutedStep("navigate", False, SECONDS["navigate"] / 2, goal=goal,
                                        path=((0.0, 0.0), (1.0, 1.0)), reason="contact",
                                        note="bumped"))

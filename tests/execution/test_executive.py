@@ -106,6 +106,20 @@ def test_an_object_that_slid_is_regrasped_and_placed_again() -> None:
     assert ex.success
 
 
+def test_an_object_dropped_in_transit_is_given_up_without_more_drives() -> None:
+    # The second drive carries the first object to the table; it slips out on the way.
+    ex, session, plan = run(FLAT, {"navigate": ["ok", "dropped"]})
+    first = plan.order[0]
+    dropped = ex.steps[2]
+    assert dropped.action == "navigate" and dropped.reason == "fell"
+    # No retry of that drive, no place: the object is on the floor, given up.
+    assert session.calls[3][0] == "navigate" and session.calls[3][1] != session.calls[2][1]
+    assert ("place", first) not in session.calls
+    assert dict(ex.unplaced_reasons)[first] == "fell"
+    assert not ex.success
+    assert {p.name for p in ex.final} == set(plan.order) - {first}
+
+
 @pytest.mark.parametrize("outcome", ["tipped", "fell"])
 def test_a_tipped_or_fallen_object_is_unplaced_and_the_run_fails(outcome: str) -> None:
     ex, session, plan = run(STACK, {"place": [outcome]})

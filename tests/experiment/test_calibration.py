@@ -45,6 +45,21 @@ def test_fit_recovers_the_model_that_drew_the_samples() -> None:
     assert got.knee * got.reach_max_m == pytest.approx(0.825, abs=0.08)
 
 
+def test_fit_recovers_a_place_curve_of_its_own() -> None:
+    truth = ParametricFeasibility(manip_max=0.98, knee=0.75, reach_max_m=1.0, place_max=0.8)
+    rng = np.random.default_rng(1)
+    robot = Robot()
+    reaches = np.repeat(np.linspace(0.3, 1.05, 16), 200)
+    picks = [Sample(float(x), bool(rng.random() < truth.manipulation(x, robot)))
+             for x in reaches]
+    places = [Sample(float(x), bool(rng.random() < truth.placing(x, robot))) for x in reaches]
+    nav = [Sample(0.1, True)] * 10
+    got = fit(picks, nav, robot, places=places)
+    assert got.manip_max == pytest.approx(0.98, abs=0.03)
+    assert got.place_max == pytest.approx(0.8, abs=0.04)
+    assert got.reach_max_m == pytest.approx(1.0, abs=0.05)
+
+
 @pytest.mark.parametrize("simulator", [Kinematic2D(), MujocoSimulator()],
                          ids=["kinematic2d", "mujoco"])
 def test_measurements_run_through_sessions(simulator) -> None:  # type: ignore[no-untyped-def]

@@ -141,3 +141,23 @@ def test_default_truth_matches_the_planners_default_belief() -> None:
     for r in np.linspace(0.0, 1.0, 101):
         belief = float(DEFAULT_FEASIBILITY.manipulation(np.array([r]), robot)[0])
         assert truth.manipulation(float(r), robot) == pytest.approx(belief, abs=1e-12)
+
+
+def test_arrivals_record_their_error() -> None:
+    scene, plan, nav = _setup()
+    ex = run(sim(1.0, 1.0), plan, scene, 0, nav)
+    drives = [s for s in ex.steps if s.action == "navigate"]
+    assert drives and all(s.arrival_error_m is not None for s in drives)
+    errors = [s.arrival_error_m for s in drives if s.arrival_error_m is not None]
+    # The 2D arrival noise: 2 cm per axis.
+    assert 0.0 < max(errors) < 0.15
+
+
+def test_a_truth_other_than_kinematic2d_s_own_needs_kinematic2d(capsys) -> None:  # type: ignore[no-untyped-def]
+    from cli_support import one_line_error
+    from llm_grop.cli import main
+
+    assert main(["run", "a mug", "--simulator", "mujoco", "--truth", "mujoco", "-q"]) == 2
+    assert "--truth mujoco: needs --simulator kinematic2d" in one_line_error(capsys)
+    assert main(["run", "a mug", "--truth", "nope", "-q"]) == 2
+    assert "--truth: unknown profile 'nope'" in one_line_error(capsys)

@@ -15,8 +15,10 @@ from llm_grop.cli.options import (
     EPILOG,
     FEASIBILITY,
     FIDELITY_WEIGHT,
+    GRASP,
     SIMULATOR,
     TABLE,
+    TRUTH,
     attempt_flags,
     check_out_dir,
     execution_flags,
@@ -120,6 +122,8 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
                    "else 1].")
 @TABLE
 @SIMULATOR
+@GRASP
+@TRUTH
 @FEASIBILITY
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
@@ -167,7 +171,8 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
                        fidelity_w: float, task_files: tuple[Path, ...], no_images: bool,
                        catalog_files: tuple[Path, ...], threads: int | None,
                        cache: str | None, nav_attempts: int = 3,
-                       manip_attempts: int | None = None, **flags: Any) -> Experiment:
+                       manip_attempts: int | None = None, grasp: str = "fix",
+                       truth: str | None = None, **flags: Any) -> Experiment:
     """The experiment ``bench``'s flags describe, every input checked (unknown components,
     tasks, objects and preferences, the output directory) before any trial runs.
 
@@ -200,7 +205,7 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
     llm_options, options = llm_settings(**flags)
     # Unknown or broken components are reported before any trial runs, and their names
     # are written canonically into the experiment's identity.
-    sim = create_simulator(simulator)
+    sim = create_simulator(simulator, grasp=grasp, truth=truth)
     feasibility_profile(feasibility)
     if not no_images and hasattr(sim, "check_rendering"):
         sim.check_rendering()  # a simulator that renders says now if it cannot
@@ -222,7 +227,8 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
         fidelity_w_s_per_cm=fidelity_w,
         task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
         images=None if no_images else str(out_dir / "images"), simulator=sim.name,
-        feasibility=feasibility, nav_attempts=nav_attempts, manip_attempts=manip_attempts)
+        feasibility=feasibility, nav_attempts=nav_attempts, manip_attempts=manip_attempts,
+        grasp=grasp, truth=truth)
     return Experiment(tasks, trials, methods, settings, seed)
 
 

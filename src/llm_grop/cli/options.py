@@ -14,6 +14,7 @@ import click
 
 from llm_grop.errors import BadInput
 from llm_grop.llm.registry import BACKENDS
+from llm_grop.simulation.mujoco.options import GRASPS
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR
 from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
 
@@ -239,6 +240,18 @@ TABLE = click.option(
 SIMULATOR = click.option(
     "--simulator", default=DEFAULT_SIMULATOR, show_default=True,
     help="The simulator that executes the plan (see `llm-grop plugins`).")
+
+TRUTH = click.option(
+    "--truth", metavar="PROFILE",
+    help="--simulator kinematic2d: draw outcomes and durations from this feasibility "
+         "profile (mujoco: what the 3D world was measured to do) [default: the 2D "
+         "simulator's own, the default profile's curves].")
+
+GRASP = click.option(
+    "--grasp", default="fix", show_default=True, type=click.Choice(GRASPS),
+    help="--simulator mujoco: how the hand holds. fix: a weld that attaches only when both "
+         "pads squeeze the object (Gazebo's grasp-fix); friction: contact friction alone "
+         "(the README lists what it can carry).")
 
 
 def attempt_flags(f: F) -> F:

@@ -12,9 +12,11 @@ from llm_grop.cli.options import (
     EPILOG,
     FEASIBILITY,
     FIDELITY_WEIGHT,
+    GRASP,
     NO_GUESS,
     SIMULATOR,
     TABLE,
+    TRUTH,
     StagedOutputs,
     attempt_flags,
     check_outputs,
@@ -41,6 +43,8 @@ from llm_grop.world.table import Table
               help="Chairs to sample near the table [default: the scene's own, else 1].")
 @TABLE
 @SIMULATOR
+@GRASP
+@TRUTH
 @FEASIBILITY
 @click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
               help="GROP's utility weight w (seconds per unit of success probability).")
@@ -60,8 +64,8 @@ from llm_grop.world.table import Table
 @NO_GUESS
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
-        chairs: int | None, table: Table | None, simulator: str, feasibility: str,
-        w: float, fidelity_w: float,
+        chairs: int | None, table: Table | None, simulator: str, grasp: str,
+        truth: str | None, feasibility: str, w: float, fidelity_w: float,
         json_path: Path | None,
         image_path: Path | None, table_image: Path | None, room_image: Path | None,
         video_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
@@ -86,7 +90,8 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
     with StagedOutputs() as outputs:
         # The video is recorded beside its place and moved there with the other outputs.
         video_tmp = outputs.path("video", video_path) if video_path is not None else None
-        sim = _simulator(simulator, table_image or room_image or video_path, video_tmp)
+        sim = _simulator(simulator, table_image or room_image or video_path, video_tmp,
+                         grasp, truth)
         with err.status("starting", spinner="dots") as status:
             def on_event(message: str) -> None:
                 if not quiet:
@@ -124,13 +129,21 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
                 out.print(f"Wrote {label}: {path}")
 
 
-def _simulator(name: str, pictures: object, video: Path | None) -> Any:
-    """The simulator to run: ``name`` from the registry; with pictures or a video it must
-    render (MuJoCo), and rendering is checked before any work."""
-    from llm_grop.simulation.registry import SIMULATORS
+def _simulator(name: str, pictures: object, video: Path | None, grasp: str = "fix",
+               truth: str | None = None) -> Any:
+    """The simulator to run: ``name`` from the registry, holding with ``grasp`` (MuJoCo)
+    or drawing from ``truth`` (2D); with pictures or a video it must render (MuJoCo), and
+    rendering is checked before any work."""
+    from llm_grop.simulation.registry import SIMULATORS, create_simulator
 
-    if not pictures:
-        return name
+    if not pictures or truth is not None:
+        if grasp == "fix" and truth is None:
+            return name
+        sim = create_simulator(name, grasp=grasp, truth=truth)
+        if pictures:
+            raise BadInput("--table-image/--room-image/--video: need --simulator mujoco "
+                           f"(got {name!r})")
+        return sim
     if SIMULATORS.key(name) != "mujoco":
         flag = "--video" if video else "--table-image/--room-image"
         raise BadInput(f"{flag}: needs --simulator mujoco (got {name!r})")
@@ -140,4 +153,5 @@ def _simulator(name: str, pictures: object, video: Path | None) -> Any:
     if video is not None:
         check_video_path(video)
     check_rendering()
-    return MujocoSimulator(MujocoOptions(video_path=str(video) if video else None))
+    return MujocoSimulator(MujocoOptions(video_path=str(video) if video else None,
+                                         grasp=grasp))  # type: ignore[arg-type]

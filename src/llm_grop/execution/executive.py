@@ -138,6 +138,8 @@ class _Executive:
                 self.check_placed(name)
                 if done.ok:
                     return k
+                if done.reason == "fell":
+                    return None  # what it carried is lost: nothing left to deliver
                 if done.reason == "blocked" and not done.path:
                     break  # no path to this goal: the next one
         return None
@@ -205,6 +207,10 @@ class _Executive:
         it where it came to rest when it stands upright on the table, giving it up when
         it tipped, fell or its attempts ran out."""
         t = self.targets[name]
+        if not self.s.objects()[name].held:
+            # Lost on the way here (it slipped from the hand in transit).
+            self.give_up(name, self._last_reason(name, "fell"))
+            return False
         while self._left(name, "place") > 0:
             on = self._support(t.on)
             attempt = self._use(name, "place")

@@ -4,7 +4,7 @@ Two measurements, each a list of ``(x, ok)`` samples in a small room with one 0.
 table (metres):
 
 * manipulation: the robot drives to a goal beside the table (with the simulator's own
-  arrival noise), then picks an object lying at planned reach ``x`` from that goal and puts
+  arrival error), then picks an object lying at planned reach ``x`` from that goal and puts
   it back; every pick and place attempt is a sample;
 * navigation: the robot drives to a goal whose footprint is ``x`` from the table's edge.
 
@@ -141,26 +141,45 @@ def measure_navigation(simulator: Simulator, clearances: Sequence[float], trials
 
 
 def fit(manipulation: Sequence[Sample], navigation: Sequence[Sample],
-        robot: Robot | None = None) -> ParametricFeasibility:
-    """The parametric model that makes the samples most likely."""
+        robot: Robot | None = None, places: Sequence[Sample] = ()) -> ParametricFeasibility:
+    """The parametric model that makes the samples most likely. With ``places``,
+    ``manipulation`` holds the picks alone, and places get their own ``place_max`` on the
+    same reach curve."""
     robot = robot or Robot()
-    nav = _fit(navigation, lambda p, x: ParametricFeasibility(
-        nav_max=p[0], nav_mid_m=p[1], nav_scale_m=p[2]).navigation(x),
+    nav = _fit([(navigation, lambda p, x: ParametricFeasibility(
+        nav_max=p[0], nav_mid_m=p[1], nav_scale_m=p[2]).navigation(x))],
         x0=(0.95, 0.02, 0.03), bounds=((0.05, 1.0), (-0.3, 0.5), (0.003, 0.3)))
-    manip = _fit(manipulation, lambda p, x: ParametricFeasibility(
-        manip_max=p[0], knee=p[1], reach_max_m=p[2]).manipulation(x, robot),
-        x0=(0.95, 0.7, 1.0), bounds=((0.05, 1.0), (0.3, 0.98), (0.5, 1.6)))
-    return ParametricFeasibility(nav[0], nav[1], nav[2], manip[0], manip[1], manip[2])
+    curve = ((0.05, 1.0), (0.3, 0.98), (0.5, 1.6))
+    if not places:
+        manip = _fit([(manipulation, lambda p, x: ParametricFeasibility(
+            manip_max=p[0], knee=p[1], reach_max_m=p[2]).manipulation(x, robot))],
+            x0=(0.95, 0.7, 1.0), bounds=curve)
+        return ParametricFeasibility(nav[0], nav[1], nav[2], manip[0], manip[1], manip[2])
+
+    def model(p: Sequence[float]) -> ParametricFeasibility:
+        return ParametricFeasibility(manip_max=p[0], knee=p[1], reach_max_m=p[2],
+                                     place_max=p[3])
+
+    manip = _fit([(manipulation, lambda p, x: model(p).manipulation(x, robot)),
+                  (places, lambda p, x: model(p).placing(x, robot))],
+                 x0=(0.95, 0.7, 1.0, 0.95), bounds=(*curve, (0.05, 1.0)))
+    return ParametricFeasibility(nav[0], nav[1], nav[2], manip[0], manip[1], manip[2],
+                                 place_max=manip[3])
 
 
-def _fit(samples: Sequence[Sample], model: Callable[[Sequence[float], np.ndarray], np.ndarray],
+def _fit(parts: Sequence[tuple[Sequence[Sample],
+                               Callable[[Sequence[float], np.ndarray], np.ndarray]]],
          x0: tuple[float, ...], bounds: tuple[tuple[float, float], ...]) -> list[float]:
-    x = np.array([s.x for s in samples], float)
-    y = np.array([s.ok for s in samples], float)
+    """The parameters that make every part's samples most likely under its model."""
+    data = [(np.array([s.x for s in samples], float), np.array([s.ok for s in samples], float),
+             model) for samples, model in parts]
 
     def nll(p: np.ndarray) -> float:
-        q = np.clip(model(p, x), 1e-4, 1 - 1e-4)
-        return float(-np.sum(y * np.log(q) + (1 - y) * np.log(1 - q)))
+        total = 0.0
+        for x, y, model in data:
+            q = np.clip(model(p, x), 1e-4, 1 - 1e-4)
+            total -= float(np.sum(y * np.log(q) + (1 - y) * np.log(1 - q)))
+        return total
 
     best = None
     for start in (x0, tuple((lo + hi) / 2 for lo, hi in bounds)):

@@ -115,6 +115,8 @@ def identity(exp: Experiment) -> dict[str, Any]:
         # Absent for the defaults, like the other settings added after the first release.
         **({"nav_attempts": s.nav_attempts} if s.nav_attempts != NAV_ATTEMPTS else {}),
         **({"manip_attempts": s.manip_attempts} if s.manip_attempts is not None else {}),
+        **({"grasp": s.grasp} if s.grasp != "fix" else {}),
+        **({"truth": s.truth} if s.truth is not None else {}),
         "plugins": _plugin_origins(exp),
         "seed": exp.seed,
         "tasks": hashlib.sha256(tasks).hexdigest()[:16] + (

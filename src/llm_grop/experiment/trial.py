@@ -76,7 +76,9 @@ class TrialSettings:
     feasibility profile; ``images``: where to draw each trial's final table (``None``: no
     pictures); ``llm_cache``: the LLM cache's directory (``None``: no cache), which changes
     no answer and so is no part of the experiment's identity; ``nav_attempts`` and
-    ``manip_attempts``: the executive's attempt counts (``None``: the method's).
+    ``manip_attempts``: the executive's attempt counts (``None``: the method's);
+    ``grasp``: how MuJoCo's hand holds (``fix`` or ``friction``); ``truth``: the
+    profile the 2D simulator draws from (``None``: its own).
     """
 
     backend: str = "replay"
@@ -95,6 +97,8 @@ class TrialSettings:
     llm_cache: str | None = None
     nav_attempts: int = NAV_ATTEMPTS
     manip_attempts: int | None = None
+    grasp: str = "fix"
+    truth: str | None = None
 
 
 class TrialRunner:
@@ -108,7 +112,8 @@ class TrialRunner:
         if settings.table is not None:
             self.scene = set_target_top(self.scene, Table.parse(settings.table),
                                         keep_chairs=settings.chairs is None)
-        self.simulator = create_simulator(settings.simulator)
+        self.simulator = create_simulator(settings.simulator, grasp=settings.grasp,
+                                          truth=settings.truth)
         self._backend: LLM | None = None
 
     def llm(self) -> CallLog:

@@ -27,8 +27,9 @@ class Obstacles:
     because the sampling planner asks for one point at a time, tens of thousands of times.
     """
 
-    def __init__(self, scene: Scene, include_chairs: bool = True) -> None:
-        shapes = scene.static_obstacles()
+    def __init__(self, scene: Scene, include_chairs: bool = True,
+                 extra: tuple[Box | Disc, ...] = ()) -> None:
+        shapes = scene.static_obstacles() + extra
         if include_chairs:
             shapes = shapes + tuple(c.box for c in scene.chairs)
         boxes = [b for b in shapes if isinstance(b, Box)]

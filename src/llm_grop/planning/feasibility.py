@@ -13,24 +13,27 @@ the :class:`FeasibilityModel` protocol, so a learned model can replace them.
   metres) succeeds with probability ``manip_max`` for ``reach_min <= r <= knee * reach_max``,
   falls smoothly (cosine) to 0 at ``reach_max``, and is 0 beyond it or below ``reach_min``.
 
-Named profiles of the parametric model live in ``planning/feasibility.yaml``: ``default``
-(assumed, the paper's black box) and ``mujoco`` (fitted to measurements in the 3D world by
-``benchmarks/calibrate_mujoco.py``). Choose one with ``--feasibility NAME``.
+Named profiles of the parametric model live in ``data/feasibility.yaml``
+(:mod:`llm_grop.world.profiles`): ``default`` (assumed, the paper's black box) and
+``mujoco`` (fitted to episodes run through the executive in the 3D world by
+``benchmarks/fit_profile.py``), with the actions' expected durations. Choose one with
+``--feasibility NAME``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from importlib import resources
+from dataclasses import asdict, dataclass
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import BaseModel, ConfigDict, Field, RootModel
 
-from llm_grop.errors import BadInput
-from llm_grop.world.datafile import load_yaml_model
+from llm_grop.world.profiles import Curves, load_profile, profile_names
 from llm_grop.world.robot import Robot
+
+__all__ = ["DEFAULT_FEASIBILITY", "ActionTimes", "FeasibilityModel",
+           "ParametricFeasibility", "action_times", "feasibility_profile", "placing",
+           "profile_names"]
 
 Floats = NDArray[np.float64]
 
@@ -48,77 +51,55 @@ class FeasibilityModel(Protocol):
 
 
 @dataclass(frozen=True)
-class ParametricFeasibility:
-    """The documented parametric model (see the module docstring).
-
-    Attributes:
-        nav_max: success probability of navigation with ample clearance.
-        nav_mid_m: clearance, metres, at which navigation succeeds half as often.
-        nav_scale_m: width of the navigation sigmoid, metres.
-        manip_max: success probability of a pick or place well within reach.
-        knee: fraction of the arm's reach beyond which manipulation gets harder.
-        reach_max_m: reach, metres, at which manipulation stops succeeding (``None``: the
-            robot's ``reach_max_m``).
-    """
-
-    nav_max: float = 0.98
-    nav_mid_m: float = 0.02
-    nav_scale_m: float = 0.02
-    manip_max: float = 0.97
-    knee: float = 0.7
-    reach_max_m: float | None = None
+class ParametricFeasibility(Curves):
+    """The documented parametric model (see the module docstring and
+    :class:`~llm_grop.world.profiles.Curves`, which holds its numbers)."""
 
     def navigation(self, clearance_m: ArrayLike) -> Floats:
-        c = np.asarray(clearance_m, dtype=float)
-        p = self.nav_max / (1.0 + np.exp(-(c - self.nav_mid_m) / self.nav_scale_m))
-        return np.where(c < 0, 0.0, p)
+        return self.navigation_p(clearance_m)
 
     def manipulation(self, reach_m: ArrayLike, robot: Robot) -> Floats:
-        r = np.asarray(reach_m, dtype=float)
-        reach = self.reach_max_m or robot.reach_max_m
-        knee = self.knee * reach
-        t = np.clip((r - knee) / (reach - knee), 0.0, 1.0)
-        p = self.manip_max * 0.5 * (1.0 + np.cos(np.pi * t))
-        return np.where((r < robot.reach_min_m) | (r >= reach), 0.0, p)
+        return self.manipulation_p(reach_m, robot)
+
+    def placing(self, reach_m: ArrayLike, robot: Robot) -> Floats:
+        """Probability that a place at these reach distances (metres) succeeds."""
+        return self.manipulation_p(reach_m, robot, place=True)
 
 
 #: The model every planner and the simulator use unless given another.
 DEFAULT_FEASIBILITY = ParametricFeasibility()
 
 
-class _ProfileModel(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+@dataclass(frozen=True)
+class ActionTimes:
+    """Expected seconds of the robot's actions under a belief: a successful pick and
+    place, a drive's overhead beyond its path and turns, and a failed attempt."""
 
-    description: str = ""
-    nav_max: float = Field(gt=0, le=1)
-    nav_mid_m: float
-    nav_scale_m: float = Field(gt=0)
-    manip_max: float = Field(gt=0, le=1)
-    knee: float = Field(gt=0, lt=1)
-    reach_max_m: float | None = Field(None, gt=0)
-
-
-class _ProfilesModel(RootModel[dict[str, _ProfileModel]]):
-    pass
+    pick_s: float
+    place_s: float
+    leg_overhead_s: float
+    failed_attempt_s: float
 
 
-def _profiles() -> dict[str, _ProfileModel]:
-    text = resources.files("llm_grop.planning").joinpath("feasibility.yaml").read_text(
-        encoding="utf-8")
-    return load_yaml_model(text, "feasibility.yaml", _ProfilesModel, "", "").root
-
-
-def profile_names() -> list[str]:
-    """Names of the packaged feasibility profiles."""
-    return sorted(_profiles())
+def action_times(model: FeasibilityModel, robot: Robot) -> ActionTimes:
+    """The times ``model`` believes in, the robot's own where it states none (a plugin
+    model without time fields believes the robot's)."""
+    pick = getattr(model, "pick_time_s", None)
+    place = getattr(model, "place_time_s", None)
+    return ActionTimes(robot.pick_time_s if pick is None else pick,
+                       robot.place_time_s if place is None else place,
+                       float(getattr(model, "leg_overhead_s", 0.0)),
+                       float(getattr(model, "failed_attempt_s", 0.0)))
 
 
 def feasibility_profile(name: str) -> ParametricFeasibility:
-    """The packaged profile called ``name``; :class:`BadInput` for an unknown one."""
-    profiles = _profiles()
-    if name not in profiles:
-        raise BadInput(f"--feasibility: unknown profile {name!r}; choose from "
-                       f"{', '.join(sorted(profiles))}")
-    p = profiles[name]
-    return ParametricFeasibility(p.nav_max, p.nav_mid_m, p.nav_scale_m, p.manip_max, p.knee,
-                                 p.reach_max_m)
+    """The packaged profile called ``name`` as a belief; :class:`BadInput` for an unknown
+    one."""
+    return ParametricFeasibility(**asdict(load_profile(name).curves))
+
+
+def placing(model: FeasibilityModel, reach_m: ArrayLike, robot: Robot) -> Floats:
+    """Probability that a place at these reaches succeeds: the model's ``placing`` when it
+    has one, else its ``manipulation`` (a plugin model that does not tell them apart)."""
+    place = getattr(model, "placing", None)
+    return place(reach_m, robot) if place is not None else model.manipulation(reach_m, robot)

@@ -26,6 +26,7 @@ import numpy as np
 from llm_grop import seeds
 from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import leg_duration_s
+from llm_grop.planning.feasibility import action_times, placing
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.sequencing import best_order, supports_before
 from llm_grop.planning.trips import plan_trips
@@ -44,6 +45,9 @@ StandingPolicy = Literal["utility", "uniform"]
 UNIFORM_REACH = 0.5
 #: Up to this many objects the order is found exactly for every configuration.
 EXACT_LIMIT = 12
+#: Success probabilities below this count as this in a plan's expected retries (a plan
+#: never chooses a step it believes impossible).
+MIN_RETRY_P = 0.05
 #: Beyond it, every configuration gets the local-search order, and the ``REFINE`` best
 #: get a branch-and-bound search of up to ``NODE_BUDGET`` nodes.
 REFINE = 2
@@ -223,6 +227,8 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
             steps, saved_s = singles, 0.0
     names = tuple(cand.placements[j].name for j in cand.order)
     return Plan(order=names, steps=steps, configuration=cand.placements,
+                expected_duration_s=expected_duration_s(
+                    steps, action_times(ctx.model, robot).failed_attempt_s),
                 configuration_index=cand.index, utility=cand.utility + saved_s,
                 feasibility=cand.feasibility, cost_s=cand.cost_s - saved_s,
                 configurations_considered=configurations, fidelity=cand.fidelity,
@@ -235,10 +241,19 @@ def _duration(steps: Sequence[Step]) -> float:
     return sum(s.duration_s for s in steps)
 
 
+def expected_duration_s(steps: Sequence[Step], failed_attempt_s: float) -> float:
+    """Expected seconds of ``steps`` with retries: each step's duration, plus
+    ``failed_attempt_s`` for each of its expected failed attempts (``1/p - 1`` for success
+    probability ``p``, counted down to :data:`MIN_RETRY_P`)."""
+    retries = sum(1.0 / max(s.success_p, MIN_RETRY_P) - 1.0 for s in steps)
+    return _duration(steps) + failed_attempt_s * retries
+
+
 def _steps(ctx: PlanningContext, cand: Candidate, trips: Sequence[tuple[int, ...]],
            navigator: Navigator, seed: int) -> tuple[Step, ...]:
     """The steps of ``cand`` carried out as ``trips``, with OMPL paths."""
     scene, robot = ctx.scene, ctx.scene.robot
+    times = action_times(ctx.model, robot)
     steps: list[Step] = []
     here = scene.robot_start
     leg = 0
@@ -251,7 +266,8 @@ def _steps(ctx: PlanningContext, cand: Candidate, trips: Sequence[tuple[int, ...
             if path is not None:
                 leg += 1
                 steps.append(Step("navigate", obj, goal=g, path=path, success_p=p,
-                                  duration_s=leg_duration_s(here, g, path, robot),
+                                  duration_s=leg_duration_s(here, g, path, robot)
+                                  + times.leg_overhead_s,
                                   alternatives=tuple(a for a in alternatives if a != g)))
                 here = g
                 return g
@@ -265,7 +281,7 @@ def _steps(ctx: PlanningContext, cand: Candidate, trips: Sequence[tuple[int, ...
             go(pu.standing.pose, pu.item, (), p_nav)
             steps.append(Step("pick", pu.item, standing=pu.standing.pose,
                               pose=(pu.source.x, pu.source.y, 0.0),
-                              duration_s=robot.pick_time_s,
+                              duration_s=times.pick_s,
                               success_p=_manip(ctx, pu.standing.pose, (pu.source.x, pu.source.y))))
         for j in trip:
             p = cand.placements[j]
@@ -274,12 +290,15 @@ def _steps(ctx: PlanningContext, cand: Candidate, trips: Sequence[tuple[int, ...
             stood = go(s.pose, p.name, alts, float(ctx.cand_nav_p[cand.stand[j]]))
             target = ctx.targets_room([p])[0]
             steps.append(Step("place", p.name, standing=stood, pose=(p.x, p.y, p.yaw),
-                              duration_s=robot.place_time_s,
-                              success_p=_manip(ctx, stood, (target[0], target[1]))))
+                              duration_s=times.place_s,
+                              success_p=_manip(ctx, stood, (target[0], target[1]), place=True)))
     return tuple(steps)
 
 
-def _manip(ctx: PlanningContext, stand: Pose2D, xy: tuple[float, float]) -> float:
-    """The feasibility model's success probability of a pick or place at ``xy`` from ``stand``."""
-    r = float(np.hypot(xy[0] - stand.x, xy[1] - stand.y))
-    return float(ctx.model.manipulation(np.array([r]), ctx.scene.robot)[0])
+def _manip(ctx: PlanningContext, stand: Pose2D, xy: tuple[float, float], place: bool = False
+           ) -> float:
+    """The feasibility model's success probability of a pick (or a ``place``) at ``xy``
+    from ``stand``."""
+    r = np.array([float(np.hypot(xy[0] - stand.x, xy[1] - stand.y))])
+    robot = ctx.scene.robot
+    return float((placing(ctx.model, r, robot) if place else ctx.model.manipulation(r, robot))[0])

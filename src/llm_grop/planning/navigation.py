@@ -19,9 +19,19 @@ from scipy.sparse import csgraph
 
 from llm_grop.geometry.obstacles import Floats, Obstacles
 from llm_grop.planning.occupancy import OccupancyGrid
+from llm_grop.world.geometry2d import Disc
 from llm_grop.world.scene import Scene
 
 Point = tuple[float, float]
+
+#: A sensed point is avoided as a disc of this radius, metres (a chair leg's half width).
+SENSED_RADIUS_M = 0.03
+#: Sensed points are thinned to one per square cell of this side, metres.
+SENSED_CELL_M = 0.04
+#: Paths keep this much more than the base's radius from obstacles where there is room
+#: (a costmap's inflation), tapering to none at their two ends, metres; where no such path
+#: exists, they keep the radius alone.
+PATH_MARGIN_M = 0.06
 
 #: Grid moves (row, column) of the 16-connected neighbourhood, one of each opposite pair.
 _MOVES = ((0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2))
@@ -137,11 +147,28 @@ class Navigator:
     """
 
     def __init__(self, scene: Scene, robot_radius_m: float, *, include_chairs: bool = True,
-                 time_limit_s: float = 0.5) -> None:
+                 time_limit_s: float = 0.5, sensed: tuple[Disc, ...] = ()) -> None:
         self.scene = scene
-        self.obstacles = Obstacles(scene, include_chairs)
+        self.include_chairs = include_chairs
+        self.obstacles = Obstacles(scene, include_chairs, sensed)
         self.radius_m = robot_radius_m
         self.time_limit_s = time_limit_s
+
+    def with_sensed(self, points: Sequence[Point]) -> Navigator:
+        """This navigator also avoiding ``points`` the robot's sensors saw (room frame),
+        each a disc of :data:`SENSED_RADIUS_M`; points on known obstacles are dropped, and
+        the rest thinned to one per :data:`SENSED_CELL_M` cell."""
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if not len(pts):
+            return self
+        pts = pts[self.obstacles.clearance(pts) > SENSED_CELL_M]
+        _, first = np.unique(np.floor(pts / SENSED_CELL_M).astype(int), axis=0,
+                             return_index=True)
+        discs = tuple(Disc(float(x), float(y), SENSED_RADIUS_M) for x, y in pts[np.sort(first)])
+        if not discs:
+            return self
+        return Navigator(self.scene, self.radius_m, include_chairs=self.include_chairs,
+                         time_limit_s=self.time_limit_s, sensed=discs)
 
     def valid(self, xy: Floats) -> NDArray[np.bool_]:
         """Whether the base fits at each room-frame point of ``xy`` (``(N, 2)``)."""
@@ -151,21 +178,51 @@ class Navigator:
         """Whether the base can drive straight from ``a`` to ``b``."""
         return self.obstacles.segment_free(a, b, self.radius_m, step_m)
 
-    def plan(self, start: Point, goal: Point, seed: int) -> tuple[Point, ...] | None:
-        """A shortcut path from ``start`` to ``goal``, or ``None`` when none was found.
+    def plan(self, start: Point, goal: Point, seed: int,
+             obstacles: Sequence[Point] = ()) -> tuple[Point, ...] | None:
+        """A shortcut path from ``start`` to ``goal``, also around the sensed
+        ``obstacles`` (room-frame points), or ``None`` when none was found.
 
-        The same ``seed`` gives the same path.
+        The same ``seed`` and obstacles give the same path.
         """
+        if len(obstacles):
+            nav = self.with_sensed(obstacles)
+            if nav is not self:
+                return nav.plan(start, goal, seed)
         ends = np.array([start, goal], dtype=float)
         if not self.valid(ends).all():
             return None
-        if self.segment_free(start, goal):
-            return (tuple(map(float, start)), tuple(map(float, goal)))  # type: ignore[return-value]
-        return _ompl_path(self, start, goal, seed)
+        for margin in (PATH_MARGIN_M, 0.0):
+            if self._clear(start, goal, ends, margin):
+                return (tuple(map(float, start)), tuple(map(float, goal)))  # type: ignore[return-value]
+            path = _ompl_path(self, start, goal, seed, margin)
+            if path is not None:
+                return path
+        return None
+
+    def required_m(self, xy: Floats, ends: Floats, margin_m: float) -> Floats:
+        """The clearance, metres, a path keeps at each room-frame point of ``xy``: the
+        radius plus ``margin_m``, tapering to the radius alone at the ``ends``."""
+        pts = np.asarray(xy, dtype=float).reshape(-1, 2)
+        d_end = np.min(np.hypot(pts[:, None, 0] - ends[None, :, 0],
+                                pts[:, None, 1] - ends[None, :, 1]), axis=1)
+        return self.radius_m + np.minimum(margin_m, 0.5 * d_end)
+
+    def _clear(self, a: Point, b: Point, ends: Floats, margin_m: float,
+               step_m: float = 0.02) -> bool:
+        """Whether the straight segment from ``a`` to ``b`` keeps :meth:`required_m`."""
+        if margin_m <= 0:
+            return self.segment_free(a, b, step_m)
+        n = max(2, math.ceil(math.dist(a, b) / step_m) + 1)
+        pts = np.linspace(a, b, n)
+        return bool((self.obstacles.clearance(pts)
+                     >= self.required_m(pts, ends, margin_m) - 1e-9).all())
 
 
-def _ompl_path(nav: Navigator, start: Point, goal: Point, seed: int) -> tuple[Point, ...] | None:
-    """RRTConnect, then OMPL's shortcutting; OMPL objects stay local to this call."""
+def _ompl_path(nav: Navigator, start: Point, goal: Point, seed: int, margin_m: float
+               ) -> tuple[Point, ...] | None:
+    """RRTConnect, then OMPL's shortcutting, keeping :meth:`Navigator.required_m` with
+    ``margin_m``; OMPL objects stay local to this call."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -180,7 +237,14 @@ def _ompl_path(nav: Navigator, start: Point, goal: Point, seed: int) -> tuple[Po
     space.setBounds(bounds)
     si = ob.SpaceInformation(space)
     free, radius = nav.obstacles.free, nav.radius_m - 1e-9
-    si.setStateValidityChecker(lambda s: free(s[0], s[1], radius))
+    (sx, sy), (gx, gy) = start, goal
+
+    def valid(s: ob.State) -> bool:
+        x, y = s[0], s[1]
+        taper = 0.5 * min(math.hypot(x - sx, y - sy), math.hypot(x - gx, y - gy))
+        return free(x, y, radius + min(margin_m, taper))
+
+    si.setStateValidityChecker(valid)
     # Motions are checked every 4 cm; the result is then pulled taut with 2 cm checks.
     si.setStateValidityCheckingResolution(0.04 / max(nav.scene.width, nav.scene.depth))
     si.setup()
@@ -199,16 +263,17 @@ def _ompl_path(nav: Navigator, start: Point, goal: Point, seed: int) -> tuple[Po
     og.PathSimplifier(si).simplifyMax(path)
     pts = [(float(q[0]), float(q[1])) for q in path.getStates()]
     pts[0], pts[-1] = (float(start[0]), float(start[1])), (float(goal[0]), float(goal[1]))
-    return _taut(nav, pts)
+    return _taut(nav, pts, margin_m)
 
 
-def _taut(nav: Navigator, pts: list[Point]) -> tuple[Point, ...]:
+def _taut(nav: Navigator, pts: list[Point], margin_m: float) -> tuple[Point, ...]:
     """``pts`` with every vertex skipped that a straight free segment can bypass."""
+    ends = np.array([pts[0], pts[-1]], dtype=float)
     out = [pts[0]]
     i = 0
     while i < len(pts) - 1:
         j = len(pts) - 1
-        while j > i + 1 and not nav.segment_free(pts[i], pts[j]):
+        while j > i + 1 and not nav._clear(pts[i], pts[j], ends, margin_m):
             j -= 1
         out.append(pts[j])
         i = j

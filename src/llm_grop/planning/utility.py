@@ -26,7 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from llm_grop.errors import BadInput, Infeasible
-from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY, FeasibilityModel
+from llm_grop.planning.feasibility import (
+    DEFAULT_FEASIBILITY,
+    FeasibilityModel,
+    action_times,
+    placing,
+)
 from llm_grop.planning.navigation import NavGraph
 from llm_grop.planning.occupancy import build_grid
 from llm_grop.planning.standing import (
@@ -172,7 +177,7 @@ class PlanningContext:
     def place_manipulation(self, placements: Sequence[Placement]) -> Floats:
         """``(n, P)`` probability that placing object ``j`` from stand ``s`` succeeds."""
         r = reach(self.candidates, self.targets_room(placements))
-        return np.asarray(self.model.manipulation(r.T, self.scene.robot), dtype=float)
+        return np.asarray(placing(self.model, r.T, self.scene.robot), dtype=float)
 
     def place_feasibility(self, placements: Sequence[Placement]) -> Floats:
         """``(n, P)`` probability that object ``j``'s fetch-and-place succeeds from stand ``s``."""
@@ -181,8 +186,8 @@ class PlanningContext:
 
     def fixed_costs_s(self) -> float:
         """Seconds of manipulation every plan spends: one pick and one place per object."""
-        robot = self.scene.robot
-        return len(self.items) * (robot.pick_time_s + robot.place_time_s)
+        times = action_times(self.model, self.scene.robot)
+        return len(self.items) * (times.pick_s + times.place_s)
 
     def unreachable_reason(self, placements: Sequence[Placement], feas: Floats) -> str | None:
         """Why some object cannot be placed from any standing position, or ``None``."""

@@ -27,9 +27,11 @@ from llm_grop.world.scene import Scene
 
 class PathPlanner(Protocol):
     """The robot's own path planner, for replanning after a failed navigation: a
-    collision-free path for the base from ``start`` to ``goal`` (room frame)."""
+    collision-free path for the base from ``start`` to ``goal`` (room frame), around the
+    known furniture and the ``obstacles`` the robot's sensors saw (room-frame points)."""
 
-    def plan(self, start: Point, goal: Point, seed: int) -> tuple[Point, ...] | None:
+    def plan(self, start: Point, goal: Point, seed: int,
+             obstacles: Sequence[Point] = ()) -> tuple[Point, ...] | None:
         """The path's points in metres, or ``None`` when there is none."""
         ...
 

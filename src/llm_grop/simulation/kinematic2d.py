@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from llm_grop.errors import BadInput
-from llm_grop.geometry.motion import leg_duration_s, path_length_m, path_prefix
+from llm_grop.geometry.motion import leg_duration_s, path_length_m, path_prefix, wrap
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
@@ -174,9 +174,13 @@ class Kinematic2DSession:
                                            reason="blocked"))
         p = self.truth.navigation(self._clearance(goal.x, goal.y))
         if self.rng.random() < p:
-            duration = leg_duration_s(self.pose, goal, route, self.robot)
+            duration = leg_duration_s(self.pose, goal, route, self.robot) \
+                + float(getattr(self.truth, "leg_overhead_s", 0.0))
             self.pose = self._arrive(goal)
-            return self._step(ExecutedStep("navigate", True, duration, goal=goal, path=route))
+            return self._step(ExecutedStep(
+                "navigate", True, duration, goal=goal, path=route,
+                arrival_error_m=round(math.dist((self.pose.x, self.pose.y), (goal.x, goal.y)), 4),
+                arrival_yaw_error_rad=round(abs(wrap(self.pose.theta - goal.theta)), 4)))
         length = path_length_m(route)
         frac = float(self.rng.uniform(*self.o.stop_fraction))
         driven = path_prefix(route, frac * length)
@@ -201,7 +205,8 @@ class Kinematic2DSession:
         """The reach to ``(x, y)`` (room frame, metres), and the failed step when the arm
         cannot reach it."""
         reach = math.hypot(x - self.pose.x, y - self.pose.y)
-        if self.robot.reach_min_m <= reach < self.robot.reach_max_m:
+        limit = getattr(self.truth, "reach_max_m", None) or self.robot.reach_max_m
+        if self.robot.reach_min_m <= reach < limit:
             return reach, None
         return reach, self._step(ExecutedStep(
             action, False, self.robot.ik_failure_s, name, standing=self.pose,
@@ -223,9 +228,9 @@ class Kinematic2DSession:
         if self.rng.random() < p:
             del self.states[name]
             self.carried.append(name)
-            return self._step(ExecutedStep("pick", True, self.robot.pick_time_s, name,
+            return self._step(ExecutedStep("pick", True, self._seconds("pick"), name,
                                            standing=standing, pose=start))
-        return self._step(ExecutedStep("pick", False, self.robot.pick_time_s, name,
+        return self._step(ExecutedStep("pick", False, self._seconds("pick"), name,
                                        standing=standing, pose=start, reason="grasp_missed",
                                        note=f"the grasp missed (reach {reach:.2f} m)"))
 
@@ -239,8 +244,9 @@ class Kinematic2DSession:
         reach, failed = self._out_of_reach("place", name, q.x, q.y)
         if failed is not None:
             return failed
-        standing, seconds = self.pose, self.robot.place_time_s
-        if self.rng.random() < self.truth.manipulation(reach, self.robot):
+        standing, seconds = self.pose, self._seconds("place")
+        place = getattr(self.truth, "placing", self.truth.manipulation)
+        if self.rng.random() < place(reach, self.robot):
             dx, dy = self.rng.normal(0.0, self.o.place_noise_std_m, 2)
             dyaw = float(self.rng.normal(0.0, self.o.place_yaw_noise_std_rad))
             self._land(name, q.x + float(dx), q.y + float(dy), q.theta + dyaw, on)
@@ -257,10 +263,16 @@ class Kinematic2DSession:
         elif why == "fell":
             self._drop(name)
         else:
-            return self._step(ExecutedStep("place", False, seconds, name, standing=standing,
-                                           reason=why, note=f"place failed: {why}"))
+            return self._step(ExecutedStep("place", False, self._seconds("place"),
+                                           name, standing=standing, reason=why,
+                                           note=f"place failed: {why}"))
         # Let go, but not where it was meant to go: the executive judges where it lies.
         return self._step(ExecutedStep("place", True, seconds, name, standing=standing))
+
+    def _seconds(self, action: str) -> float:
+        """How long a pick or place attempt takes: the truth's time, else the robot's."""
+        own = getattr(self.truth, f"{action}_time_s", None)
+        return float(own if own is not None else getattr(self.robot, f"{action}_time_s"))
 
     def _land(self, name: str, x: float, y: float, yaw: float, on: str | None,
               tilt_rad: float = 0.0) -> None:

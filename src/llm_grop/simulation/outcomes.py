@@ -4,7 +4,8 @@ The planner has its own belief (:mod:`llm_grop.planning.feasibility`); the simul
 sees it. By default the truth has the same shape and numbers as the planner's default
 belief, as in the paper, where uncertainty is a black box the planner models well; give
 :class:`~llm_grop.simulation.kinematic2d.Kinematic2DOptions` other outcomes to study a
-planner whose belief is wrong.
+planner whose belief is wrong, or a packaged profile's (``--truth mujoco``: what the 3D
+world was measured to do, so that 2D is a fast stand-in for it).
 
 * Navigation to a goal with clearance ``c`` (metres, from the base's footprint to the
   nearest obstacle, real chairs included) succeeds with
@@ -16,10 +17,10 @@ planner whose belief is wrong.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Protocol
 
+from llm_grop.world.profiles import Curves, load_profile
 from llm_grop.world.robot import Robot
 
 
@@ -36,24 +37,27 @@ class Outcomes(Protocol):
 
 
 @dataclass(frozen=True)
-class ParametricOutcomes:
-    """The parametric truth described in the module docstring (probabilities 0-1, metres)."""
+class ParametricOutcomes(Curves):
+    """The parametric truth described in the module docstring, one action at a time; its
+    numbers (:class:`~llm_grop.world.profiles.Curves`) include how long actions take: a
+    pick or place attempt takes ``pick_time_s`` or ``place_time_s`` (``None``: the
+    robot's) whether it succeeds or not, and ``leg_overhead_s`` is added to every drive.
+    (``failed_attempt_s``, what the planner expects a failure to cost with its recovery,
+    is the 2D simulator's to produce, not to draw.)
+    """
 
-    nav_max: float = 0.98
-    nav_mid_m: float = 0.02
-    nav_scale_m: float = 0.02
-    manip_max: float = 0.97
-    knee: float = 0.7
+    @classmethod
+    def from_profile(cls, name: str) -> ParametricOutcomes:
+        """The truth of the packaged profile ``name`` (:mod:`llm_grop.world.profiles`);
+        :class:`~llm_grop.errors.BadInput` for an unknown one."""
+        return cls(**asdict(load_profile(name, "--truth").curves))
 
     def navigation(self, clearance_m: float) -> float:
-        if clearance_m < 0:
-            return 0.0
-        return self.nav_max / (1.0 + math.exp(-(clearance_m - self.nav_mid_m)
-                                              / self.nav_scale_m))
+        return float(self.navigation_p(clearance_m))
 
     def manipulation(self, reach_m: float, robot: Robot) -> float:
-        if not robot.reach_min_m <= reach_m < robot.reach_max_m:
-            return 0.0
-        knee_m = self.knee * robot.reach_max_m
-        t = min(max((reach_m - knee_m) / (robot.reach_max_m - knee_m), 0.0), 1.0)
-        return self.manip_max * 0.5 * (1.0 + math.cos(math.pi * t))
+        return float(self.manipulation_p(reach_m, robot))
+
+    def placing(self, reach_m: float, robot: Robot) -> float:
+        """Probability that a place at this reach (metres) succeeds."""
+        return float(self.manipulation_p(reach_m, robot, place=True))

@@ -33,8 +33,24 @@ def available_simulators() -> list[str]:
     return SIMULATORS.names()
 
 
-def create_simulator(name: str = DEFAULT_SIMULATOR) -> Simulator:
-    """A new simulator by name; :class:`BadInput` for an unknown or malformed one."""
+def create_simulator(name: str = DEFAULT_SIMULATOR, *, grasp: str = "fix",
+                     truth: str | None = None) -> Simulator:
+    """A new simulator by name; :class:`BadInput` for an unknown or malformed one. A grasp
+    other than MuJoCo's default ``fix`` needs ``mujoco``; a ``truth`` (a packaged profile
+    the 2D draws follow) needs ``kinematic2d``."""
+    if truth is not None:
+        if SIMULATORS.key(name) != "kinematic2d":
+            raise BadInput(f"--truth {truth}: needs --simulator kinematic2d (got {name!r})")
+        from llm_grop.simulation.kinematic2d import Kinematic2D, Kinematic2DOptions
+        from llm_grop.simulation.outcomes import ParametricOutcomes
+
+        return Kinematic2D(Kinematic2DOptions(outcomes=ParametricOutcomes.from_profile(truth)))
+    if grasp != "fix":
+        if SIMULATORS.key(name) != "mujoco":
+            raise BadInput(f"--grasp {grasp}: needs --simulator mujoco (got {name!r})")
+        from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
+
+        return MujocoSimulator(MujocoOptions(grasp=grasp))  # type: ignore[arg-type]
     sim: Simulator = SIMULATORS.create(name)
     key = SIMULATORS.key(name)
     if sim.name != key:

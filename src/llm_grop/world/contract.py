@@ -190,6 +190,12 @@ class StepDoc(Doc):
                                                                  "frame, metres")
     reason: Reason | None = Field(None, description="why a failed attempt failed, from one "
                                                     "closed list")
+    arrival_error_m: Num | None = Field(
+        None, description="navigate: distance from where the base stopped to its goal, "
+                          "metres")
+    arrival_yaw_error_rad: Num | None = Field(
+        None, description="navigate: absolute difference between the base's heading and "
+                          "the goal's, radians")
 
 
 class StandingDoc(Doc):

@@ -84,6 +84,8 @@ class Plan:
         considered: every configuration GROP evaluated, with its utility, fidelity and
             score (utility minus the fidelity penalty).
         fidelity_w_s_per_cm: the fidelity weight, seconds per centimetre, of the choice.
+        expected_duration_s: expected seconds of execution, expected retries included
+            (``None``: the steps' durations, nothing failing).
     """
 
     order: tuple[str, ...]
@@ -97,6 +99,7 @@ class Plan:
     fidelity: Fidelity = Fidelity()
     considered: tuple[Considered, ...] = ()
     fidelity_w_s_per_cm: float = 0.0
+    expected_duration_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -106,7 +109,9 @@ class ExecutedStep:
     ``path`` is the driven path (room frame); ``pose`` for ``place`` is where the object
     really landed, table frame; ``attempt`` counts from 1; ``note`` says why it failed in
     words and ``reason`` as one of :data:`REASONS` (``None`` when it succeeded, or for an
-    action refused before any attempt, such as a pick while the hand is full).
+    action refused before any attempt, such as a pick while the hand is full). A
+    ``navigate`` step records where the base ended against its goal: ``arrival_error_m``
+    (metres) and ``arrival_yaw_error_rad`` (radians, absolute).
     """
 
     action: Action
@@ -120,6 +125,8 @@ class ExecutedStep:
     attempt: int = 1
     note: str = ""
     reason: Reason | None = None
+    arrival_error_m: float | None = None
+    arrival_yaw_error_rad: float | None = None
 
 
 @dataclass(frozen=True)

@@ -53,6 +53,10 @@ def step_doc(s: ExecutedStep) -> StepDoc:
         out["path"] = [(rounded(x), rounded(y)) for x, y in s.path]
     if s.reason is not None:
         out["reason"] = s.reason
+    if s.arrival_error_m is not None:
+        out["arrival_error_m"] = rounded(s.arrival_error_m)
+    if s.arrival_yaw_error_rad is not None:
+        out["arrival_yaw_error_rad"] = rounded(s.arrival_yaw_error_rad)
     return StepDoc(**out)
 
 
@@ -69,7 +73,9 @@ def plan_doc(plan: Plan) -> PlanDoc:
         expected_utility=round(plan.utility, 3),
         feasibility=round(plan.feasibility, 4),
         expected_cost_s=round(plan.cost_s, 3),
-        expected_duration_s=round(sum(s.duration_s for s in plan.steps), 3),
+        expected_duration_s=round(sum(s.duration_s for s in plan.steps)
+                                  if plan.expected_duration_s is None
+                                  else plan.expected_duration_s, 3),
         fidelity=PlanFidelityDoc(
             weight_s_per_cm=plan.fidelity_w_s_per_cm,
             chosen=fidelity_doc(plan.fidelity, gaps=True),

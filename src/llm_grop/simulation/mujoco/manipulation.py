@@ -3,13 +3,19 @@
 A pick goes pre-grasp, grasp, close, lift, carry; a place goes pre-place, lower, release,
 retreat, and physics settles the object. An attempt fails when no IK solution reaches the
 pose (after the robot's ``ik_failure_s`` of planning), when the arm or what it holds
-touches furniture, or when the pads close on nothing. Where a released object comes to
+touches furniture, or when the pads do not squeeze it. Where a released object comes to
 rest (upright or tipped, on its support or not) is for the executive to judge.
 
-Holding uses a contact-triggered weld: when both pads touch the object after closing, a
-weld between hand and object switches on, and it switches off at release. Thin cutlery and
-plate rims are too small for MuJoCo's soft contacts to hold through a drive across the room,
-so every object is held this way; the pads must still reach and touch it.
+Holding follows Gazebo's grasp-fix plugin: after the fingers close, a weld between hand
+and object switches on only when both pads press on the object with opposing forces
+(each at least :data:`GRIP_FORCE_N`, directions at least 120 degrees apart) for
+:data:`GRIP_CHECKS` control periods in a row; pads that merely touch, or press from one
+side, miss the grasp. The weld switches off when the pads open more than 5 mm past where
+they gripped (grasp-fix's release tolerance), as they do to let go. With the ``friction``
+grasp (:attr:`MujocoOptions.grasp`) there is no weld: the squeezing pads hold the object by
+contact friction alone, and an object that slips 2 cm in the hand is lost (a ``pick``
+whose object slips while lifting misses its grasp; a drop in transit is reported by the
+drive, ``fell``).
 """
 
 from __future__ import annotations
@@ -28,6 +34,13 @@ from llm_grop.world.plan import Reason
 APPROACH_M = 0.10
 #: An object is released this high above its surface (metres).
 DROP_M = 0.006
+#: The grasp attaches when each pad presses with at least this force, newtons, ...
+GRIP_FORCE_N = 2.0
+#: ... the two pushes' directions differ by at least this angle, radians (120 degrees,
+#: Gazebo grasp-fix's forces_angle_tolerance) ...
+GRIP_ANGLE_RAD = math.radians(120.0)
+#: ... for this many control periods in a row, after the fingers have closed.
+GRIP_CHECKS = 5
 #: Where the hand lets go of an abandoned object: beside the base, left then right, below
 #: any table top and clear of the table the robot faces (base frame, metres).
 DROP_POINTS = ((0.0, 0.5, 0.4), (0.0, -0.5, 0.4))
@@ -82,17 +95,19 @@ def pick(w: World, name: str) -> Attempt:
     if note:
         return _abort(w, t0, note)
     w.set_fingers(0.0, 0.4)
-    if not all(_touches(w, w.pads[side], name) for side in ("left", "right")):
+    if not _grip(w, name):
         w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
-        return _abort(w, t0, "the pads closed on nothing", "grasp_missed")
-    _weld(w, name, True)
+        return _abort(w, t0, "the pads do not squeeze it", "grasp_missed")
+    w.hold(name)
     note = w.move_arm(q_above, speed_radps=0.6, at_surface=True) \
         or w.move_arm(w.ik.carry())
     if note:
         # Put it back down: a failed pick never leaves the object in the hand.
-        _weld(w, name, False)
         w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
         return _abort(w, t0, note)
+    if w.held != name:
+        w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
+        return _abort(w, t0, "it slipped from the pads while lifting", "grasp_missed")
     return Attempt(True, w.d.time - t0)
 
 
@@ -123,7 +138,6 @@ def place(w: World, name: str, x: float, y: float, yaw: float, support: str) -> 
     note = w.move_arm(above.q) or w.move_arm(at.q, speed_radps=0.5, at_surface=True)
     if note:
         return _abort(w, t0, note)
-    _weld(w, name, False)
     w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.25)
     w.move_arm(above.q, speed_radps=0.6, at_surface=True)
     w.move_arm(w.ik.carry())
@@ -141,7 +155,6 @@ def release(w: World) -> None:
         if low.ok:
             w.move_arm(low.q, at_surface=True)
             break
-    _weld(w, w.held, False)
     w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.3)
     w.move_arm(w.ik.carry(), at_surface=True)
 
@@ -170,33 +183,35 @@ def _hand_yaw(w: World) -> float:
     return math.atan2(float(x[1]), float(x[0])) - w.base_pose().theta
 
 
-def _touches(w: World, geoms: np.ndarray, name: str) -> bool:
-    n = w.d.ncon
-    if n == 0:
-        return False
-    pairs = w.d.contact.geom[:n]
+def _grip(w: World, name: str) -> bool:
+    """Whether the pads grip ``name``: for :data:`GRIP_CHECKS` control periods in a row,
+    each pad presses on it with at least :data:`GRIP_FORCE_N` and the two pushes differ in
+    direction by at least :data:`GRIP_ANGLE_RAD` (Gazebo grasp-fix's attach test)."""
+    for _ in range(GRIP_CHECKS):
+        w.advance(w.m.opt.timestep * w.control_steps)
+        left, right = (_push(w, w.pads[side], name) for side in ("left", "right"))
+        fl, fr = float(np.linalg.norm(left)), float(np.linalg.norm(right))
+        if min(fl, fr) < GRIP_FORCE_N:
+            return False
+        if math.acos(max(-1.0, min(1.0, float(left @ right) / (fl * fr)))) < GRIP_ANGLE_RAD:
+            return False
+    return True
+
+
+def _push(w: World, geoms: np.ndarray, name: str) -> np.ndarray:
+    """The total normal force, newtons (room frame), that the geoms ``geoms`` exert on
+    ``name`` through their contacts now."""
+    total = np.zeros(3)
     owner = w.wm.owner
-    return any((a in geoms and owner[b] == name) or (b in geoms and owner[a] == name)
-               for a, b in pairs)
-
-
-def _weld(w: World, name: str, on: bool) -> None:
-    """Switch the weld between hand and ``name`` on (holding its current relative pose)
-    or off."""
-    eq = w.wm.welds[name]
-    if on:
-        hand, obj = w.d.body("hand"), w.d.body(name)
-        r_hand = hand.xmat.reshape(3, 3)
-        rel_pos = r_hand.T @ (obj.xpos - hand.xpos)
-        q_hand_inv = np.zeros(4)
-        mujoco.mju_negQuat(q_hand_inv, hand.xquat)
-        rel_quat = np.zeros(4)
-        mujoco.mju_mulQuat(rel_quat, q_hand_inv, obj.xquat)
-        w.m.eq_data[eq, 0:3] = 0.0
-        w.m.eq_data[eq, 3:6] = rel_pos
-        w.m.eq_data[eq, 6:10] = rel_quat
-        w.m.eq_data[eq, 10] = 1.0
-        w.held = name
-    else:
-        w.held = None
-    w.d.eq_active[eq] = int(on)
+    wrench = np.zeros(6)
+    for k in range(w.d.ncon):
+        a, b = (int(g) for g in w.d.contact.geom[k])
+        if a in geoms and owner[b] == name:
+            sign = 1.0  # the normal points from the first geom (a pad) to the object
+        elif b in geoms and owner[a] == name:
+            sign = -1.0
+        else:
+            continue
+        mujoco.mj_contactForce(w.m, w.d, k, wrench)
+        total += sign * wrench[0] * w.d.contact.frame[k][:3]
+    return total

@@ -1,8 +1,74 @@
-"""Settings of the MuJoCo world (metres, seconds, radians, pixels)."""
+"""Settings of the MuJoCo world (metres, seconds, radians, newtons, pixels)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Literal, get_args
+
+from llm_grop.errors import BadInput
+
+#: How the hand holds an object: ``fix``, a weld that attaches only on a squeezing grip
+#: (Gazebo's grasp-fix), or ``friction``, contact friction alone.
+Grasp = Literal["fix", "friction"]
+GRASPS: tuple[str, ...] = get_args(Grasp)
+
+
+@dataclass(frozen=True)
+class LidarOptions:
+    """The base's 2D laser scanner: rays cast in MuJoCo in one horizontal plane.
+
+    Attributes:
+        height_m: height of the scan plane above the floor, metres. Table tops (0.69 m)
+            and chair seats (0.43 m) are above it; table and chair legs cross it.
+        beams: rays per scan, spread evenly over the full turn.
+        rate_hz: scans per simulated second.
+        range_m: farthest return, metres.
+    """
+
+    height_m: float = 0.25
+    beams: int = 360
+    rate_hz: float = 10.0
+    range_m: float = 6.0
+
+
+@dataclass(frozen=True)
+class BaseOptions:
+    """The wheeled base: its limits, its path follower, its goal checker and its safety
+    layer.
+
+    Attributes:
+        accel_mps2: largest forward acceleration and braking, metres per second squared.
+        turn_accel_radps2: largest turning acceleration, radians per second squared.
+        traction_n: largest force the wheels transmit to the floor, newtons (friction 0.6
+            under the robot's 98 kg); a bump cannot push harder than this.
+        lookahead_m: the path follower's lookahead distance, metres.
+        rotate_to_heading_rad: turn in place first when the lookahead point is further
+            than this off the heading, radians.
+        xy_goal_tolerance_m: the goal checker's position tolerance, metres (ROS 1
+            base_local_planner's default, which the authors' move_base used).
+        yaw_goal_tolerance_rad: the goal checker's heading tolerance, radians (likewise).
+        stop_margin_m: the safety layer keeps the footprint this far from what the lidar
+            sees, metres.
+        slow_horizon_s: the safety layer slows so that the footprint, carrying on at the
+            commanded speed, would reach an obstacle no sooner than this, seconds (Nav2's
+            collision monitor's approach behaviour).
+        min_speed_mps: below this allowed speed the safety layer stops the base and the
+            drive fails ``blocked``, metres per second.
+        progress_timeout_s: a drive fails ``blocked`` when the base has neither moved
+            0.1 m nor turned 0.5 rad for this long, seconds (Nav2's progress checker).
+    """
+
+    accel_mps2: float = 0.5
+    turn_accel_radps2: float = 2.0
+    traction_n: float = 580.0
+    lookahead_m: float = 0.3
+    rotate_to_heading_rad: float = 0.6
+    xy_goal_tolerance_m: float = 0.10
+    yaw_goal_tolerance_rad: float = 0.05
+    stop_margin_m: float = 0.01
+    slow_horizon_s: float = 1.0
+    min_speed_mps: float = 0.03
+    progress_timeout_s: float = 6.0
 
 
 @dataclass(frozen=True)
@@ -10,8 +76,16 @@ class MujocoOptions:
     """Settings of the 3D world.
 
     Attributes:
-        nav_noise_var_m2: variance of the final base position, per axis, square metres.
-        heading_noise_std_rad: standard deviation of the final heading, radians.
+        base: the wheeled base and its navigation (:class:`BaseOptions`).
+        lidar: the base's laser scanner (:class:`LidarOptions`).
+        grasp: how the hand holds (:data:`Grasp`): ``fix`` or ``friction``.
+        chair_mass_kg: mass of a chair, kilograms; chairs are free bodies a bump pushes.
+        chair_friction: sliding friction between a chair's legs and the floor.
+        nav_noise_var_m2: variance, per axis, square metres, of an offset added to every
+            navigation goal after the base arrives (the authors' setting is 0.03; 0, the
+            default: the arrival error is whatever the controller achieves).
+        heading_noise_std_rad: standard deviation of the heading offset added with it,
+            radians (used only when ``nav_noise_var_m2`` is above 0).
         timestep_s: physics time step, seconds.
         image_size: width and height of offscreen renders, pixels.
         video_path: where to write an MP4 video of the episode (``None``: no video).
@@ -19,10 +93,29 @@ class MujocoOptions:
         video_fps: frames per second of the video.
     """
 
-    nav_noise_var_m2: float = 0.03
+    base: BaseOptions = field(default_factory=BaseOptions)
+    lidar: LidarOptions = field(default_factory=LidarOptions)
+    grasp: Grasp = "fix"
+    chair_mass_kg: float = 5.0
+    chair_friction: float = 0.5
+    nav_noise_var_m2: float = 0.0
     heading_noise_std_rad: float = 0.03
     timestep_s: float = 0.004
     image_size: tuple[int, int] = (640, 480)
     video_path: str | None = None
     video_frame_s: float = 0.2
     video_fps: int = 25
+
+    def __post_init__(self) -> None:
+        if self.grasp not in GRASPS:
+            raise BadInput(f"--grasp: unknown grasp {self.grasp!r}; choose from "
+                           f"{', '.join(GRASPS)}")
+        if self.nav_noise_var_m2 < 0 or self.heading_noise_std_rad < 0:
+            raise BadInput("mujoco options: nav_noise_var_m2 and heading_noise_std_rad must "
+                           "not be negative")
+        if self.lidar.beams < 1 or self.lidar.rate_hz <= 0 or self.lidar.range_m <= 0:
+            raise BadInput("mujoco options: lidar: beams, rate_hz and range_m must be "
+                           "positive")
+        if self.chair_mass_kg <= 0 or self.chair_friction <= 0:
+            raise BadInput("mujoco options: chair_mass_kg and chair_friction must be "
+                           "positive")

@@ -11,13 +11,14 @@ from dataclasses import replace
 
 import numpy as np
 
+from llm_grop.geometry.motion import wrap
 from llm_grop.simulation.base import PathPlanner
-from llm_grop.simulation.mujoco import manipulation
+from llm_grop.simulation.mujoco import drive, manipulation
 from llm_grop.simulation.mujoco.options import MujocoOptions
 from llm_grop.simulation.mujoco.render import View, picture
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.world.geometry2d import Pose2D
-from llm_grop.world.plan import ExecutedStep, ObjectState, Point, Reason
+from llm_grop.world.plan import ExecutedStep, ObjectState, Point
 from llm_grop.world.scene import Scene
 
 log = logging.getLogger(__name__)
@@ -41,6 +42,8 @@ class MujocoSession:
         self.names = tuple(names)
         self.mark = float(world.d.time)
         self.on_close = on_close
+        #: What the lidar saw at the end of the last drive (room frame, metres).
+        self.seen: tuple[Point, ...] = ()
 
     # -- state ------------------------------------------------------------------------
     @property
@@ -101,29 +104,36 @@ class MujocoSession:
 
     # -- navigation -------------------------------------------------------------------
     def navigate(self, goal: Pose2D, path: Sequence[Point] = ()) -> ExecutedStep:
-        """One attempt to drive to ``goal``, along ``path`` when given, and on to a noisy
-        final pose (the authors' variance); a contact stops it and the base backs off."""
+        """One attempt to drive to ``goal`` with the base's navigation stack (see
+        :mod:`~llm_grop.simulation.mujoco.drive`), along ``path`` when given, else along a
+        path planned around the furniture and what the lidar saw last. With
+        ``nav_noise_var_m2`` the base then drives on to a sampled offset (the authors'
+        setting). The step records the arrival error the controller achieved."""
+        self.w.dropped = None
         route = tuple(path) or self._path_to(goal)
         if not route:
             return self._step(ExecutedStep("navigate", False, 0.0, goal=goal, note="no path",
                                            reason="blocked"))
-        drive = self.w.drive(route, goal.theta)
-        if not drive.ok:
-            self.w.back_off()
-            return self._step(ExecutedStep("navigate", False, 0.0, goal=goal, path=drive.path,
-                                           reason=_reason(drive.note),
-                                           note=f"navigation failed: {drive.note}"))
-        std = math.sqrt(self.o.nav_noise_var_m2)
-        dx, dy = (float(v) for v in self.rng.normal(0.0, std, 2))
-        dth = float(self.rng.normal(0.0, self.o.heading_noise_std_rad))
+        d = drive.follow(self.w, route, goal, self.o.base)
+        self.seen = d.seen
+        passed = d.path
+        if d.ok and self.o.nav_noise_var_m2 > 0:
+            std = math.sqrt(self.o.nav_noise_var_m2)
+            dx, dy = (float(v) for v in self.rng.normal(0.0, std, 2))
+            dth = float(self.rng.normal(0.0, self.o.heading_noise_std_rad))
+            here = self.w.base_pose()
+            offset = Pose2D(here.x + dx, here.y + dy, goal.theta + dth)
+            d = drive.follow(self.w, [(offset.x, offset.y)], offset, self.o.base)
+            passed = passed + d.path[1:]
         here = self.w.base_pose()
-        settle = self.w.drive([(here.x + dx, here.y + dy)], goal.theta + dth, holonomic=True)
-        if not settle.ok:
-            self.w.back_off()
+        ok, reason, note = d.ok, d.reason, "" if d.ok else f"navigation failed: {d.note}"
+        if self.w.dropped is not None:
+            ok, reason = False, "fell"
+            note = f"dropped {self.w.dropped!r} in transit" + (f"; {note}" if note else "")
         return self._step(ExecutedStep(
-            "navigate", settle.ok, 0.0, goal=goal, path=drive.path + settle.path[1:],
-            reason=None if settle.ok else _reason(settle.note),
-            note="" if settle.ok else f"navigation failed on arrival: {settle.note}"))
+            "navigate", ok, 0.0, goal=goal, path=passed, reason=reason, note=note,
+            arrival_error_m=round(math.dist((here.x, here.y), (goal.x, goal.y)), 4),
+            arrival_yaw_error_rad=round(abs(wrap(here.theta - goal.theta)), 4)))
 
     def _path_to(self, goal: Pose2D) -> tuple[Point, ...]:
         """A new path to ``goal`` from where the base stands; when the planner cannot start
@@ -134,7 +144,8 @@ class MujocoSession:
             for k in range(8 if radius else 1):
                 a = 2 * math.pi * k / 8
                 start = (here.x + radius * math.cos(a), here.y + radius * math.sin(a))
-                path = self.replan.plan(start, (goal.x, goal.y), seed=seed)
+                path = self.replan.plan(start, (goal.x, goal.y), seed=seed,
+                                        obstacles=self.seen)
                 if path:
                     return path if radius else path[1:]
         return ()
@@ -176,7 +187,3 @@ class MujocoSession:
         spent, self.mark = now - self.mark, now
         return round(spent, 6)
 
-
-def _reason(note: str) -> Reason:
-    """A failed drive's reason: ``contact`` when it touched furniture, else ``blocked``."""
-    return "contact" if note.startswith("contact") else "blocked"

@@ -1,10 +1,11 @@
 """The MuJoCo simulator (registered as ``mujoco``): a mobile manipulator in 3D physics,
 offering the executive one attempt at a time (:class:`MujocoSession`).
 
-* Navigation: the base follows a path under position control, turning in place between
-  segments, and on to a noisy final pose (the authors' variance, 0.03 m² per axis).
-  Contact with furniture (a chair the planner did not expect, a table a noisy arrival
-  runs into) stops it, and it backs off.
+* Navigation (:mod:`~llm_grop.simulation.mujoco.drive`): a differential-drive base under
+  velocity control follows the path with pure pursuit, a safety layer on a simulated 2D
+  lidar slows and stops it before what it sees, and a goal checker judges arrival within
+  x/y and yaw tolerances. Contact with furniture it could not see (a chair leg between
+  beams) stops it, pushes the chair by physics, and it backs off.
 * Manipulation (:mod:`~llm_grop.simulation.mujoco.manipulation`): IK, pre-grasp, grasp,
   close, lift, carry; pre-place, lower, release, settle.
 * Truth: every object's pose, tilt and support (from contact) are read from the settled
@@ -93,8 +94,11 @@ class MujocoSimulator:
                 raise BadInput(f"scene {scene.name!r}: no start for object {p.name!r}")
             starts.append(ObjectStart(item, src.x, src.y, scene.table(src.table).height))
         o = self.options
-        wm = build(scene, starts, timestep_s=o.timestep_s, image_size=o.image_size)
-        world = World(wm, scene, self._ik, speed_mps=scene.robot.speed_mps,
+        wm = build(scene, starts, timestep_s=o.timestep_s, image_size=o.image_size,
+                   traction_n=o.base.traction_n, chair_mass_kg=o.chair_mass_kg,
+                   chair_friction=o.chair_friction)
+        world = World(wm, scene, self._ik, lidar=o.lidar, grasp=o.grasp,
+                      speed_mps=scene.robot.speed_mps,
                       turn_speed_radps=scene.robot.turn_speed_radps, on_frame=self.on_frame,
                       frame_dt_s=o.video_frame_s)
         self.world = world

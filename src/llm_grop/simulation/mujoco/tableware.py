@@ -29,8 +29,15 @@ MAX_OPENING_M = 0.14
 MAX_RIM_DIAMETER_M = 0.40
 #: Tallest object the fingers can hold upright, metres.
 MAX_HEIGHT_M = 0.30
-#: Half height of a finger pad, metres (robot.xml); pads stay this far above a support.
+#: Half height of a finger pad, metres (robot.xml).
 PAD_HALF_HEIGHT_M = 0.012
+#: Pads stay this far above the support of most objects, metres ...
+PAD_CLEAR_M = 0.001
+#: ... but aim this far below it on an object at most :data:`THIN_M` tall (a mat), sliding
+#: on the surface, so that they close on its edge even when the arm stops a few
+#: millimetres high, and not on its top.
+PAD_PRESS_M = 0.002
+THIN_M = 0.006
 #: Rim segments of a plate or bowl.
 RIM_SEGMENTS = 12
 
@@ -112,11 +119,12 @@ class Tableware:
         if self.style == "plate":
             width, disk = self.rim()
             r_mid = self.size[0] / 2 - width / 2
-            z = max(h / 2, disk + PAD_HALF_HEIGHT_M + 0.001)
+            z = max(h / 2, disk + PAD_HALF_HEIGHT_M + PAD_CLEAR_M)
             return tuple(Grasp((r_mid * math.cos(a), r_mid * math.sin(a), z), a, width)
                          for a in (2 * math.pi * (k + 0.5) / RIM_SEGMENTS
                                    for k in range(RIM_SEGMENTS)))
-        z = max(h / 2 if h < 0.06 else h - 0.03, PAD_HALF_HEIGHT_M + 0.001)
+        low = PAD_HALF_HEIGHT_M + (-PAD_PRESS_M if h <= THIN_M else PAD_CLEAR_M)
+        z = max(h / 2 if h < 0.06 else h - 0.03, low)
         if self.shape == "circle":
             # The mug's handle points along +x, so the pads close across y.
             return (Grasp((0.0, 0.0, z), math.pi / 2, self.size[0]),

@@ -1,9 +1,11 @@
-"""The running dining room: physics stepping, the base's path following, and reading where
-things are.
+"""The running dining room: physics stepping, the robot's actuators and sensors, and
+reading where things are.
 
-Everything moves under control: the base's three joints and the arm's six track position
-references through their actuators, and MuJoCo integrates the dynamics and contacts. Time
-is simulated seconds (``data.time``). Manipulation lives in
+Everything moves under control: the base's three planar joints track velocity commands
+(a differential drive, within the wheels' traction), the arm's six joints and the two
+fingers track position references, and MuJoCo integrates the dynamics and contacts. Time
+is simulated seconds (``data.time``). Driving lives in
+:mod:`llm_grop.simulation.mujoco.drive`, manipulation in
 :mod:`llm_grop.simulation.mujoco.manipulation`.
 """
 
@@ -18,15 +20,30 @@ import numpy as np
 
 from llm_grop.geometry.motion import wrap
 from llm_grop.simulation.mujoco.arm import ARM_JOINTS, ArmIK
+from llm_grop.simulation.mujoco.lidar import Lidar
+from llm_grop.simulation.mujoco.options import Grasp, LidarOptions
 from llm_grop.simulation.mujoco.world_model import WorldModel
 from llm_grop.world.geometry2d import Pose2D
-from llm_grop.world.plan import Point
 from llm_grop.world.scene import Scene
 
 #: Physics steps between two control updates (0.04 s at the default 4 ms time step).
 CONTROL_STEPS = 10
-#: How far, metres, the base moves before furniture it touched at the start counts again.
-CLEAR_M = 0.3
+#: The pads' gap with the fingers shut, metres.
+PAD_GAP_M = 0.004
+#: The hand lets go when the pads open this much past where they gripped, metres
+#: (Gazebo grasp-fix's release_tolerance).
+RELEASE_TOLERANCE_M = 0.005
+#: Held by friction, an object has slipped once the point the pads gripped moved this far
+#: from between them, metres.
+SLIP_M = 0.02
+#: Contact dimensions of the pads with the friction grasp: sliding, torsional and rolling
+#: friction (MuJoCo's condim 6) ...
+FRICTION_CONDIM = 6
+#: ... and their coefficients: sliding; torsional and rolling, metres (about half the
+#: pad's 24 mm face).
+PAD_FRICTION = (1.5, 0.012, 0.012)
+#: MuJoCo's impratio with the friction grasp (1 otherwise).
+FRICTION_IMPRATIO = 10.0
 #: A body is "on" a surface when its bottom is within this height of the surface, metres.
 REST_TOL_M = 0.015
 
@@ -43,21 +60,11 @@ class ObjectPose:
     tilt: float
 
 
-@dataclass(frozen=True)
-class Drive:
-    """How a drive along a path ended: ``ok``, the points the base passed (room frame),
-    the seconds it took, and what stopped it (``note``)."""
-
-    ok: bool
-    path: tuple[Point, ...]
-    duration_s: float
-    note: str = ""
-
-
 class World:
     """One episode's physics: the model, its data and the robot's controllers."""
 
-    def __init__(self, wm: WorldModel, scene: Scene, ik: ArmIK, *, speed_mps: float,
+    def __init__(self, wm: WorldModel, scene: Scene, ik: ArmIK, *, lidar: LidarOptions,
+                 speed_mps: float, grasp: Grasp = "fix",
                  turn_speed_radps: float,
                  on_frame: Callable[[World], None] | None = None, frame_dt_s: float = 0.2
                  ) -> None:
@@ -72,16 +79,44 @@ class World:
         self.base_qpos = [m.joint(n).qposadr[0] for n in ("base_x", "base_y", "base_yaw")]
         self.arm_qpos = np.array([m.joint(n).qposadr[0] for n in ARM_JOINTS])
         self.arm_ctrl = np.array([m.actuator(n).id for n in ARM_JOINTS])
+        self.base_dof = [m.joint(n).dofadr[0] for n in ("base_x", "base_y", "base_yaw")]
         self.base_ctrl = [m.actuator(n).id for n in ("base_x", "base_y", "base_yaw")]
+        #: The base's footprint radius, metres.
+        self.radius = scene.robot.base_radius_m
+        #: Physics steps per control period.
+        self.control_steps = CONTROL_STEPS
+        self.lidar = Lidar(m, lidar, m.body("base").id)
         self.finger_ctrl = [m.actuator(n).id for n in ("finger_left", "finger_right")]
+        self.finger_qpos = [m.joint(n).qposadr[0] for n in ("finger_left", "finger_right")]
         self.pads = {side: np.array([m.geom(f"finger_{side}").id, m.geom(f"pad_{side}").id])
                      for side in ("left", "right")}
         self.held: str | None = None
+        #: How the hand holds: ``fix`` (a weld on a squeezing grip) or ``friction``.
+        self.grasp: Grasp = grasp
+        #: The object the hand lost since the flag was last cleared, if any.
+        self.dropped: str | None = None
+        #: At the grasp: the object's position in the hand frame, the point of the object
+        #: between the pads in the object's frame, and the fingers' opening (metres),
+        #: against which slips and openings are judged.
+        self.grip_rel = np.zeros(3)
+        self.grip_point = np.zeros(3)
+        self.grip_opening = 0.0
+        if grasp == "friction":
+            # Torsional and rolling friction too: a pad's 24 mm face resists an object
+            # that would spin or pivot in it (a plate hanging from its rim), which a
+            # point contact would not.
+            for side in ("left", "right"):
+                self.m.geom_condim[self.pads[side]] = FRICTION_CONDIM
+                self.m.geom_friction[self.pads[side]] = PAD_FRICTION
+            # Soft friction cones let a squeezed object creep under a steady load; a high
+            # ratio of frictional to normal impedance stops the creep, as MuJoCo's
+            # documentation advises for grasping.
+            self.m.opt.impratio = FRICTION_IMPRATIO
         #: Width, metres, of the object between the pads at the last grasp.
         self.grip_width = 0.05
         start = scene.robot_start
         self.d.qpos[self.base_qpos] = (start.x, start.y, start.theta)
-        self.d.ctrl[self.base_ctrl] = (start.x, start.y, start.theta)
+        self.d.ctrl[self.base_ctrl] = 0.0
         carry = ik.carry()
         self.d.qpos[self.arm_qpos] = carry
         self.d.ctrl[self.arm_ctrl] = carry
@@ -99,17 +134,69 @@ class World:
         n = max(1, round(seconds / (self.m.opt.timestep * CONTROL_STEPS)))
         for _ in range(n):
             mujoco.mj_step(self.m, self.d, nstep=CONTROL_STEPS)
-            self._frame()
+            self.frame()
             if check is not None:
                 note = check()
                 if note:
                     return note
         return ""
 
-    def _frame(self) -> None:
+    def frame(self) -> None:
+        """Watch the grip, and call the frame hook when a frame is due (every control
+        period)."""
+        if self.held is not None:
+            self._watch_grip()
         if self.on_frame is not None and self.d.time >= self._next_frame:
             self._next_frame = self.d.time + self.frame_dt
             self.on_frame(self)
+
+    # -- the grip ---------------------------------------------------------------------
+    def finger_opening(self) -> float:
+        """How far apart the pads are now, metres."""
+        return float(2 * self.d.qpos[self.finger_qpos].mean() + PAD_GAP_M)
+
+    def hold(self, name: str | None) -> None:
+        """Start holding ``name`` (after a grip), or stop holding (``None``): with the
+        ``fix`` grasp the weld between hand and object switches on or off."""
+        if self.held is not None and self.grasp == "fix":
+            self.d.eq_active[self.wm.welds[self.held]] = 0
+        self.held = name
+        if name is None:
+            return
+        hand, obj = self.d.body("hand"), self.d.body(name)
+        r_hand = hand.xmat.reshape(3, 3)
+        site = self.d.site("grasp").xpos
+        self.grip_rel = r_hand.T @ (obj.xpos - hand.xpos)
+        self.grip_point = obj.xmat.reshape(3, 3).T @ (site - obj.xpos)
+        self.grip_opening = self.finger_opening()
+        if self.grasp == "fix":
+            eq = self.wm.welds[name]
+            q_hand_inv, rel_quat = np.zeros(4), np.zeros(4)
+            mujoco.mju_negQuat(q_hand_inv, hand.xquat)
+            mujoco.mju_mulQuat(rel_quat, q_hand_inv, obj.xquat)
+            self.m.eq_data[eq, 0:3] = 0.0
+            self.m.eq_data[eq, 3:6] = self.grip_rel
+            self.m.eq_data[eq, 6:10] = rel_quat
+            self.m.eq_data[eq, 10] = 1.0
+            self.d.eq_active[eq] = 1
+
+    def _watch_grip(self) -> None:
+        """Held by friction, lose the object when the pads opened more than
+        :data:`RELEASE_TOLERANCE_M` past where they gripped it or it slipped
+        :data:`SLIP_M` in the hand. (The weld of the ``fix`` grasp lets go when the hand
+        is commanded open, :meth:`set_fingers`: its soft pads yield a few millimetres under
+        a welded plate's rim without letting go.)"""
+        assert self.held is not None
+        if self.grasp != "friction":
+            return
+        lost = self.finger_opening() > self.grip_opening + RELEASE_TOLERANCE_M
+        if not lost:
+            obj = self.d.body(self.held)
+            gripped = obj.xpos + obj.xmat.reshape(3, 3) @ self.grip_point
+            lost = float(np.linalg.norm(gripped - self.d.site("grasp").xpos)) > SLIP_M
+        if lost:
+            self.dropped = self.held
+            self.hold(None)
 
     # -- where things are -------------------------------------------------------------
     def base_pose(self) -> Pose2D:
@@ -198,78 +285,42 @@ class World:
         return out
 
     # -- the base ---------------------------------------------------------------------
-    def drive(self, path: Sequence[Point], heading: float, *, stop_on_contact: bool = True,
-              holonomic: bool = False) -> Drive:
-        """Follow ``path`` (room frame), turning in place between segments and to
-        ``heading`` at the end (``holonomic``: sliding and turning at once, for short
-        corrections); with ``stop_on_contact``, stop at the first contact with furniture
-        (contacts present at the start are overlooked)."""
-        t0 = self.d.time
-        here = self.base_pose()
-        yaw = float(self.d.qpos[self.base_qpos[2]])
-        dt = self.m.opt.timestep * CONTROL_STEPS
-        if holonomic:
-            refs = _slide(here, yaw, path[-1], heading, self.speed, self.turn_speed, dt)
-        else:
-            refs = _references(here, yaw, path, heading, self.speed, self.turn_speed, dt)
-        # Furniture the base already touches (after a bump, or resting against a table it
-        # works at) is overlooked until the base has moved clear of it.
-        bodies = {int(self.m.geom_bodyid[g]) for g in self.touching_furniture()}
-        passed: list[Point] = [(here.x, here.y)]
-        note = ""
-        for ref in refs:
-            self.d.ctrl[self.base_ctrl] = ref
-            mujoco.mj_step(self.m, self.d, nstep=CONTROL_STEPS)
-            self._frame()
-            p = self.base_pose()
-            if stop_on_contact:
-                near = math.dist((here.x, here.y), (p.x, p.y)) < CLEAR_M
-                note = self.collisions(ignore_bodies=tuple(bodies) if near else ())
-                if note:
-                    break
-            if math.dist(passed[-1], (p.x, p.y)) > 0.05:
-                passed.append((p.x, p.y))
-        if note:
-            p = self.base_pose()
-            self.d.ctrl[self.base_ctrl] = (p.x, p.y, float(self.d.qpos[self.base_qpos[2]]))
-        if not self._settle_base() and stop_on_contact and not note:
-            note = "blocked short of its goal"
-        p = self.base_pose()
-        if math.dist(passed[-1], (p.x, p.y)) > 1e-3:
-            passed.append((p.x, p.y))
-        return Drive(not note, tuple(passed), self.d.time - t0, note)
+    def command_base(self, v_mps: float, turn_radps: float) -> None:
+        """Command the base to move forward at ``v_mps`` and turn at ``turn_radps`` (a
+        differential drive: never sideways)."""
+        th = float(self.d.qpos[self.base_qpos[2]])
+        self.d.ctrl[self.base_ctrl] = (v_mps * math.cos(th), v_mps * math.sin(th), turn_radps)
 
-    def _settle_base(self, limit_s: float = 2.0) -> bool:
-        """Wait until the base has caught up with its reference (1 mm, 2 mrad); whether it
-        came within 2 cm and 0.05 rad of it (else something holds it back)."""
-        for _ in range(max(1, round(limit_s / (self.m.opt.timestep * CONTROL_STEPS)))):
-            err = self.d.qpos[self.base_qpos] - self.d.ctrl[self.base_ctrl]
-            if abs(err[0]) < 1e-3 and abs(err[1]) < 1e-3 and abs(err[2]) < 2e-3:
-                return True
-            mujoco.mj_step(self.m, self.d, nstep=CONTROL_STEPS)
-            self._frame()
-        err = self.d.qpos[self.base_qpos] - self.d.ctrl[self.base_ctrl]
-        return bool(math.hypot(err[0], err[1]) < 0.02 and abs(err[2]) < 0.05)
+    def base_velocity(self) -> tuple[float, float]:
+        """The base's forward speed (metres per second) and turn rate (radians per
+        second) now."""
+        vx, vy, turn = (float(v) for v in self.d.qvel[self.base_dof])
+        th = float(self.d.qpos[self.base_qpos[2]])
+        return vx * math.cos(th) + vy * math.sin(th), turn
 
-    def back_off(self, distance_m: float = 0.08) -> None:
-        """Move a little away from the furniture the robot bumped (straight back when it
-        touches nothing any more), as a robot does after a bump."""
-        p = self.base_pose()
-        yaw = float(self.d.qpos[self.base_qpos[2]])
-        away = (-math.cos(p.theta), -math.sin(p.theta))
-        n = self.d.ncon
-        for k in range(n):
+    def chair_positions(self) -> dict[str, tuple[float, float]]:
+        """Where each chair stands now (room frame, metres)."""
+        return {n: (float(self.d.xpos[b][0]), float(self.d.xpos[b][1]))
+                for n, b in self.wm.chairs.items()}
+
+    def chair_moved(self, before: dict[str, tuple[float, float]]
+                    ) -> tuple[str, float] | None:
+        """The chair that moved farthest since ``before`` and how far (metres), if any
+        moved more than a millimetre."""
+        now = self.chair_positions()
+        moved = max(((n, math.dist(before[n], now[n])) for n in before),
+                    key=lambda m: m[1], default=None)
+        return moved if moved is not None and moved[1] > 1e-3 else None
+
+    def furniture_contact_points(self) -> list[tuple[float, float]]:
+        """Where the robot touches furniture now (room frame, metres)."""
+        out = []
+        for k in range(self.d.ncon):
             a, b = self.d.contact.geom[k]
             if (self.wm.robot[a] and self.wm.furniture[b]) or \
                     (self.wm.robot[b] and self.wm.furniture[a]):
-                cx, cy = (float(v) for v in self.d.contact.pos[k][:2])
-                norm = math.hypot(p.x - cx, p.y - cy)
-                if norm > 1e-6:
-                    away = ((p.x - cx) / norm, (p.y - cy) / norm)
-                break
-        self.d.ctrl[self.base_ctrl] = (p.x + distance_m * away[0],
-                                       p.y + distance_m * away[1], yaw)
-        self.advance(0.5)
+                out.append((float(self.d.contact.pos[k][0]), float(self.d.contact.pos[k][1])))
+        return out
 
     # -- the arm ----------------------------------------------------------------------
     def arm_q(self) -> np.ndarray:
@@ -291,7 +342,7 @@ class World:
             s = s * s * (3 - 2 * s)
             self.d.ctrl[self.arm_ctrl] = start + s * (goal - start)
             mujoco.mj_step(self.m, self.d, nstep=CONTROL_STEPS)
-            self._frame()
+            self.frame()
             note = self.collisions(arm_only=True, at_surface=at_surface, ignore=ignore)
             if note:
                 self.d.ctrl[self.arm_ctrl] = self.arm_q()
@@ -300,8 +351,11 @@ class World:
                                                           ignore=ignore))
 
     def set_fingers(self, opening_m: float, seconds: float = 0.3) -> None:
-        """Command the pads to ``opening_m`` apart (0: squeeze shut) and wait."""
-        q = min(max((opening_m - 0.004) / 2, 0.0), 0.07)
+        """Command the pads to ``opening_m`` apart (0: squeeze shut) and wait; opening the
+        hand lets go of what it holds."""
+        if self.held is not None and opening_m > self.grip_opening:
+            self.hold(None)
+        q = min(max((opening_m - PAD_GAP_M) / 2, 0.0), 0.07)
         self.d.ctrl[self.finger_ctrl] = q
         self.advance(seconds)
 
@@ -315,38 +369,3 @@ def _furniture_label(geom: str) -> str:
         return f"table {name!r}"
     return geom
 
-
-def _slide(start: Pose2D, yaw: float, goal: Point, heading: float, speed: float,
-           turn_speed: float, dt: float) -> list[tuple[float, float, float]]:
-    """Base references sliding straight to ``goal`` while turning to ``heading``."""
-    end = yaw + wrap(heading - yaw)
-    seconds = max(math.dist((start.x, start.y), goal) / speed, abs(end - yaw) / turn_speed)
-    n = max(1, math.ceil(seconds / dt))
-    return [(start.x + (goal[0] - start.x) * k / n, start.y + (goal[1] - start.y) * k / n,
-             yaw + (end - yaw) * k / n) for k in range(1, n + 1)]
-
-
-def _references(start: Pose2D, yaw: float, path: Sequence[Point], heading: float,
-                speed: float, turn_speed: float, dt: float) -> list[tuple[float, float, float]]:
-    """Base references every ``dt`` seconds: turn in place towards each segment, drive it,
-    then turn to ``heading``. Yaw is kept continuous (unwrapped) from ``yaw``."""
-    refs: list[tuple[float, float, float]] = []
-    x, y = start.x, start.y
-
-    def turn_to(target: float) -> None:
-        nonlocal yaw
-        goal = yaw + wrap(target - yaw)
-        n = math.ceil(abs(goal - yaw) / (turn_speed * dt))
-        refs.extend((x, y, yaw + (goal - yaw) * k / n) for k in range(1, n + 1))
-        yaw = goal
-
-    for px, py in path:
-        length = math.hypot(px - x, py - y)
-        if length < 1e-3:
-            continue
-        turn_to(math.atan2(py - y, px - x))
-        n = math.ceil(length / (speed * dt))
-        refs.extend((x + (px - x) * k / n, y + (py - y) * k / n, yaw) for k in range(1, n + 1))
-        x, y = px, py
-    turn_to(heading)
-    return refs

@@ -26,8 +26,13 @@ from llm_grop.world.scene import Chair, Scene, SceneTable
 
 #: Furniture collision bits (robot.xml): collides with the robot (2) and tableware (4).
 FURNITURE = (1, 2 | 4)
-#: Floor collision bits: only tableware lands on it.
-FLOOR = (8, 4)
+#: Chair collision bits: like furniture, and also with other furniture (1) and the floor
+#: (16), since a chair is pushed across the floor and into tables and walls.
+CHAIR = (1 | 16, 1 | 2 | 4)
+#: Floor collision bits: tableware and chairs stand on it.
+FLOOR = (8, 4 | 16)
+#: Shares of a chair's mass: seat, back, and each of four legs.
+CHAIR_MASS_SHARES = (0.4, 0.3, 0.075)
 #: Height of the outer and interior walls, metres (low, so the overview sees in).
 WALL_HEIGHT_M = 1.0
 #: Chairs: seat height, seat thickness, back height (metres).
@@ -78,6 +83,7 @@ class WorldModel:
         parts: tableware name -> per geom, whether the geom is part of it.
         tops: table name -> geom id of its top.
         welds: tableware name -> id of its grasp weld.
+        chairs: chair name -> body id.
     """
 
     model: mujoco.MjModel
@@ -90,6 +96,7 @@ class WorldModel:
     parts: dict[str, np.ndarray]
     tops: dict[str, int]
     welds: dict[str, int]
+    chairs: dict[str, int]
 
 
 def robot_xml() -> str:
@@ -120,11 +127,20 @@ def check_scene(scene: Scene) -> None:
 
 
 def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.004,
-          image_size: tuple[int, int] = (640, 480)) -> WorldModel:
+          image_size: tuple[int, int] = (640, 480), traction_n: float = 580.0,
+          chair_mass_kg: float = 5.0, chair_friction: float = 0.5) -> WorldModel:
     """The dining room of ``scene`` with the robot at its start and the tableware at
-    ``starts``. Raises :class:`BadInput` when the scene cannot be built."""
+    ``starts``; the base's wheels transmit at most ``traction_n`` newtons, and chairs
+    weigh ``chair_mass_kg`` and slide with friction ``chair_friction``. Raises
+    :class:`BadInput` when the scene cannot be built."""
     check_scene(scene)
     spec = mujoco.MjSpec.from_file(robot_xml())
+    for act in spec.actuators:
+        if act.name in ("base_x", "base_y"):
+            act.forcerange = [-traction_n, traction_n]
+        elif act.name == "base_yaw":
+            # Two wheels 0.5 m apart turn the base with their traction at 0.25 m.
+            act.forcerange = [-0.25 * traction_n, 0.25 * traction_n]
     spec.modelname = "llm-grop dining room"
     spec.option.timestep = timestep_s
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -139,7 +155,7 @@ def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.
         _table(world, t, _TARGET if t.name == scene.target else _WOOD)
     centre = scene.target_table.box
     for c in scene.chairs:
-        _chair(world, c, (centre.x, centre.y))
+        _chair(world, c, (centre.x, centre.y), chair_mass_kg, chair_friction)
     for s in starts:
         rgba = _KIND_COLOURS.get(s.item.kind, _COLOURS[s.item.style])
         add_body(world, s.item, (s.x, s.y, s.z), s.yaw, rgba)
@@ -152,10 +168,12 @@ def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.
 
 
 def _box_geom(body: mujoco.MjsBody, name: str, size: Sequence[float], pos: Sequence[float],
-              yaw: float, rgba: Sequence[float]) -> None:
-    body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=list(size), pos=list(pos),
-                  quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)], rgba=list(rgba),
-                  contype=FURNITURE[0], conaffinity=FURNITURE[1], group=GROUP_WORLD)
+              yaw: float, rgba: Sequence[float], bits: tuple[int, int] = FURNITURE
+              ) -> mujoco.MjsGeom:
+    return body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=list(size),
+                         pos=list(pos), quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)],
+                         rgba=list(rgba), contype=bits[0], conaffinity=bits[1],
+                         group=GROUP_WORLD)
 
 
 def _cylinder_geom(body: mujoco.MjsBody, name: str, radius: float, half_height: float,
@@ -215,8 +233,10 @@ def _table(world: mujoco.MjsBody, table: SceneTable, rgba: Sequence[float]) -> N
                   _WOOD)
 
 
-def _chair(world: mujoco.MjsBody, chair: Chair, table_xy: tuple[float, float]) -> None:
-    """A chair whose back is on its side away from the target table's centre."""
+def _chair(world: mujoco.MjsBody, chair: Chair, table_xy: tuple[float, float],
+           mass_kg: float, friction: float) -> None:
+    """A free-standing chair of ``mass_kg`` whose back is on its side away from the target
+    table's centre; its legs slide on the floor with ``friction``."""
     b = chair.box
     u, v = b.to_local(*table_xy)
     # The back's direction in the chair's frame: the axis pointing away from the table.
@@ -226,17 +246,26 @@ def _chair(world: mujoco.MjsBody, chair: Chair, table_xy: tuple[float, float]) -
         back = (0.0, -math.copysign(1, v))
     body = world.add_body(name=f"chair:{chair.name}", pos=[b.x, b.y, 0],
                           quat=[math.cos(b.yaw / 2), 0, 0, math.sin(b.yaw / 2)])
+    body.add_freejoint(name=f"chair:{chair.name}")
+    seat_share, back_share, leg_share = CHAIR_MASS_SHARES
     hw, hd = b.width / 2, b.depth / 2
-    _box_geom(body, f"seat:{chair.name}", (hw, hd, SEAT_T_M / 2), (0, 0, SEAT_Z_M), 0.0, _CHAIR)
+    seat = _box_geom(body, f"seat:{chair.name}", (hw, hd, SEAT_T_M / 2), (0, 0, SEAT_Z_M), 0.0,
+                     _CHAIR, CHAIR)
+    seat.mass = seat_share * mass_kg
     for k, (sx, sy) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1))):
-        _box_geom(body, f"chair leg:{chair.name}:{k}", (0.02, 0.02, SEAT_Z_M / 2),
-                  (sx * (hw - 0.03), sy * (hd - 0.03), SEAT_Z_M / 2), 0.0, _CHAIR)
+        leg = _box_geom(body, f"chair leg:{chair.name}:{k}", (0.02, 0.02, SEAT_Z_M / 2),
+                        (sx * (hw - 0.03), sy * (hd - 0.03), SEAT_Z_M / 2), 0.0, _CHAIR, CHAIR)
+        leg.mass = leg_share * mass_kg
+        # The legs' friction, not the floor's, decides how a chair slides.
+        leg.priority = 1
+        leg.friction = [friction, 0.005, 0.0001]
     back_h = (BACK_TOP_M - SEAT_Z_M) / 2
     if back[0]:
         size, pos = (0.02, hd, back_h), (back[0] * (hw - 0.02), 0, SEAT_Z_M + back_h)
     else:
         size, pos = (hw, 0.02, back_h), (0, back[1] * (hd - 0.02), SEAT_Z_M + back_h)
-    _box_geom(body, f"back:{chair.name}", size, pos, 0.0, _CHAIR)
+    back_geom = _box_geom(body, f"back:{chair.name}", size, pos, 0.0, _CHAIR, CHAIR)
+    back_geom.mass = back_share * mass_kg
 
 
 def _cameras(world: mujoco.MjsBody, scene: Scene) -> None:
@@ -271,8 +300,9 @@ def _index(model: mujoco.MjModel, scene: Scene, objects: dict[str, Tableware]) -
     tops = {t.name: model.geom(f"top:{t.name}").id for t in scene.tables}
     welds = {n: model.equality(f"grip:{n}").id for n in objects}
     parts = {n: np.array([o == n for o in owner]) for n in objects}
+    chairs = {c.name: model.body(f"chair:{c.name}").id for c in scene.chairs}
     return WorldModel(model, objects, furniture, robot, arm, fingers, tuple(owner), parts,
-                      tops, welds)
+                      tops, welds, chairs)
 
 
 def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
