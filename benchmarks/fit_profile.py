@@ -70,7 +70,9 @@ def episode(job: tuple[str, int, int, str, str, str | None]) -> dict[str, Any]:
         if s.action == "navigate" and s.goal is not None:
             x = float(obstacles.clearance([(s.goal.x, s.goal.y)])[0]) - robot.base_radius_m
         elif s.standing is not None and s.reason != "disturbed":
-            if s.action == "pick" and s.pose is not None:
+            if s.action == "pick":
+                if s.pose is None:
+                    continue  # a 2D pick beyond reach says not where the object lay
                 ox, oy = s.pose[0], s.pose[1]
             else:
                 t = targets[s.object or ""]
@@ -155,8 +157,10 @@ def fitted(rows: list[dict[str, Any]]) -> dict[str, float | None]:
     attempts = [a for r in rows for a in r["attempts"]]
 
     def samples(action: str, only_first: bool) -> list[Sample]:
+        # A drive that dropped what it carried failed the grasp, not the drive.
         return [Sample(a["x"], a["ok"]) for a in attempts
-                if a["action"] == action and (a["attempt"] == 1 or not only_first)]
+                if a["action"] == action and (a["attempt"] == 1 or not only_first)
+                and not (action == "navigate" and a["reason"] == "fell")]
 
     robot = Robot()
     # The reach curve's shape from every attempt (the arm's reach does not change on a

@@ -120,6 +120,16 @@ def test_an_object_dropped_in_transit_is_given_up_without_more_drives() -> None:
     assert {p.name for p in ex.final} == set(plan.order) - {first}
 
 
+def test_an_object_dropped_on_the_way_to_the_next_standing_position_is_given_up() -> None:
+    # The first place is out of reach; driving to the next standing position, the object
+    # slips from the hand. The executive gives it up rather than place an empty hand.
+    ex, session, plan = run(FLAT, {"place": ["no_ik"], "navigate": ["ok", "ok", "dropped"]})
+    first = plan.order[0]
+    assert [s.reason for s in ex.steps[3:5]] == ["no_ik", "fell"]
+    assert session.calls.count(("place", first)) == 1
+    assert dict(ex.unplaced_reasons)[first] == "fell"
+
+
 @pytest.mark.parametrize("outcome", ["tipped", "fell"])
 def test_a_tipped_or_fallen_object_is_unplaced_and_the_run_fails(outcome: str) -> None:
     ex, session, plan = run(STACK, {"place": [outcome]})

@@ -207,11 +207,11 @@ class _Executive:
         it where it came to rest when it stands upright on the table, giving it up when
         it tipped, fell or its attempts ran out."""
         t = self.targets[name]
-        if not self.s.objects()[name].held:
-            # Lost on the way here (it slipped from the hand in transit).
-            self.give_up(name, self._last_reason(name, "fell"))
-            return False
         while self._left(name, "place") > 0:
+            if not self.s.objects()[name].held:
+                # Lost on the way (it slipped from the hand in transit).
+                self.give_up(name, self._last_reason(name, "fell"))
+                return False
             on = self._support(t.on)
             attempt = self._use(name, "place")
             done, state = judged_place(self.s, self.scene, name, t.x, t.y, t.yaw, on,

@@ -18,7 +18,8 @@ Every control period (``CONTROL_STEPS`` physics steps):
    what was seen;
 4. a contact between the robot and furniture (a chair leg between the lidar's beams, a
    table top above its plane) stops the drive: it fails ``contact``, the base backs off,
-   and the contact points join what the lidar saw, for the replan.
+   and the contact points join what the lidar saw, for the replan (which drops those on
+   furniture it already knows, so they matter where a chair was pushed or is unknown).
 
 The goal checker declares arrival when the base is within ``xy_goal_tolerance_m`` of the
 goal and then within ``yaw_goal_tolerance_rad`` of its heading, as Nav2's
@@ -176,10 +177,13 @@ def follow(w: World, path: Sequence[Point], goal: Pose2D, o: BaseOptions,
             passed.append((q.x, q.y))
         if math.dist(mark, (q.x, q.y)) > PROGRESS_M or abs(wrap(q.theta - mark_yaw)) > PROGRESS_RAD:
             mark, mark_yaw, mark_t = (q.x, q.y), q.theta, w.d.time
-        if w.d.time - mark_t > o.progress_timeout_s or w.d.time - t0 > time_limit_s:
+        stalled = w.d.time - mark_t > o.progress_timeout_s
+        if stalled or w.d.time - t0 > time_limit_s:
             _stop(w, limits)
-            return Drive(False, _ended(w, passed), w.d.time - t0, "blocked",
-                         "made no progress towards the goal", _points(seen))
+            why = "made no progress towards the goal" if stalled else \
+                f"did not arrive within {time_limit_s:.0f} s"
+            return Drive(False, _ended(w, passed), w.d.time - t0, "blocked", why,
+                         _points(seen))
 
 
 def back_off(w: World, o: BaseOptions) -> None:

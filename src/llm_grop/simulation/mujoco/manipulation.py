@@ -10,12 +10,12 @@ Holding follows Gazebo's grasp-fix plugin: after the fingers close, a weld betwe
 and object switches on only when both pads press on the object with opposing forces
 (each at least :data:`GRIP_FORCE_N`, directions at least 120 degrees apart) for
 :data:`GRIP_CHECKS` control periods in a row; pads that merely touch, or press from one
-side, miss the grasp. The weld switches off when the pads open more than 5 mm past where
-they gripped (grasp-fix's release tolerance), as they do to let go. With the ``friction``
-grasp (:attr:`MujocoOptions.grasp`) there is no weld: the squeezing pads hold the object by
-contact friction alone, and an object that slips 2 cm in the hand is lost (a ``pick``
-whose object slips while lifting misses its grasp; a drop in transit is reported by the
-drive, ``fell``).
+side, miss the grasp. The weld switches off when the hand is commanded open to let go.
+With the ``friction`` grasp (:attr:`MujocoOptions.grasp`) there is no weld: the squeezing
+pads hold the object by contact friction alone, and an object is lost when the pads open
+5 mm past where they gripped it (grasp-fix's release tolerance) or its gripped point slips
+2 cm (a ``pick`` whose object slips while lifting misses its grasp; a drop in transit is
+reported by the session's ``navigate``, ``fell``).
 """
 
 from __future__ import annotations

@@ -125,6 +125,7 @@ class MujocoSession:
             offset = Pose2D(here.x + dx, here.y + dy, goal.theta + dth)
             d = drive.follow(self.w, [(offset.x, offset.y)], offset, self.o.base)
             passed = passed + d.path[1:]
+            self.seen = self.seen + d.seen
         here = self.w.base_pose()
         ok, reason, note = d.ok, d.reason, "" if d.ok else f"navigation failed: {d.note}"
         if self.w.dropped is not None:
