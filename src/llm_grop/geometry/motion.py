@@ -36,6 +36,13 @@ def leg_duration_s(start: Pose2D, goal: Pose2D, path: Sequence[tuple[float, floa
         + turning_rad(start, goal, path) / robot.turn_speed_radps
 
 
+def arrival_error(here: Pose2D, goal: Pose2D) -> tuple[float, float]:
+    """How far a base standing at ``here`` is from ``goal``: distance (metres) and absolute
+    heading difference (radians), rounded to 0.1 mm and 0.1 mrad."""
+    return (round(math.dist((here.x, here.y), (goal.x, goal.y)), 4),
+            round(abs(wrap(here.theta - goal.theta)), 4))
+
+
 def wrap(angle: float) -> float:
     """``angle`` in radians wrapped to ``[-pi, pi)``."""
     return (angle + math.pi) % (2 * math.pi) - math.pi

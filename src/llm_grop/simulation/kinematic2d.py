@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from llm_grop.errors import BadInput
-from llm_grop.geometry.motion import leg_duration_s, path_length_m, path_prefix, wrap
+from llm_grop.geometry.motion import arrival_error, leg_duration_s, path_length_m, path_prefix
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
@@ -177,10 +177,10 @@ class Kinematic2DSession:
             duration = leg_duration_s(self.pose, goal, route, self.robot) \
                 + float(getattr(self.truth, "leg_overhead_s", 0.0))
             self.pose = self._arrive(goal)
+            error_m, error_rad = arrival_error(self.pose, goal)
             return self._step(ExecutedStep(
-                "navigate", True, duration, goal=goal, path=route,
-                arrival_error_m=round(math.dist((self.pose.x, self.pose.y), (goal.x, goal.y)), 4),
-                arrival_yaw_error_rad=round(abs(wrap(self.pose.theta - goal.theta)), 4)))
+                "navigate", True, duration, goal=goal, path=route, arrival_error_m=error_m,
+                arrival_yaw_error_rad=error_rad))
         length = path_length_m(route)
         frac = float(self.rng.uniform(*self.o.stop_fraction))
         driven = path_prefix(route, frac * length)

@@ -33,7 +33,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-import mujoco
 import numpy as np
 
 from llm_grop.geometry.motion import wrap
@@ -156,10 +155,8 @@ def follow(w: World, path: Sequence[Point], goal: Pose2D, o: BaseOptions,
                                  _points(seen))
                 v_cmd = min(v_cmd, allowed)
                 w_cmd = curvature * v_cmd
-        v, turn = limits.step(v_cmd, w_cmd)
-        w.command_base(v, turn)
-        mujoco.mj_step(w.m, w.d, nstep=w.control_steps)
-        w.frame()
+        w.command_base(*limits.step(v_cmd, w_cmd))
+        w.advance(limits.dt)
         q = w.base_pose()
         near = math.dist((start.x, start.y), (q.x, q.y)) < CLEAR_M
         note = w.collisions(ignore_bodies=tuple(bodies) if near else ())
@@ -200,8 +197,7 @@ def back_off(w: World, o: BaseOptions) -> None:
     n = max(1, math.ceil(BACK_OFF_M / BACK_OFF_MPS / limits.dt))
     for _ in range(n):
         w.command_base(*limits.step(sign * BACK_OFF_MPS, 0.0))
-        mujoco.mj_step(w.m, w.d, nstep=w.control_steps)
-        w.frame()
+        w.advance(limits.dt)
     _stop(w, limits)
 
 
@@ -209,8 +205,7 @@ def _stop(w: World, limits: _Limits, limit_s: float = 1.0) -> None:
     """Brake at the acceleration limits until the base stands still."""
     for _ in range(max(1, round(limit_s / limits.dt))):
         w.command_base(*limits.step(0.0, 0.0))
-        mujoco.mj_step(w.m, w.d, nstep=w.control_steps)
-        w.frame()
+        w.advance(limits.dt)
         v, turn = w.base_velocity()
         if limits.v == 0 and limits.w == 0 and abs(v) < STILL_MPS and abs(turn) < STILL_RADPS:
             break

@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from llm_grop.geometry.motion import wrap
+from llm_grop.geometry.motion import arrival_error
 from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.mujoco import drive, manipulation
 from llm_grop.simulation.mujoco.options import MujocoOptions
@@ -126,15 +126,14 @@ class MujocoSession:
             d = drive.follow(self.w, [(offset.x, offset.y)], offset, self.o.base)
             passed = passed + d.path[1:]
             self.seen = self.seen + d.seen
-        here = self.w.base_pose()
+        error_m, error_rad = arrival_error(self.w.base_pose(), goal)
         ok, reason, note = d.ok, d.reason, "" if d.ok else f"navigation failed: {d.note}"
         if self.w.dropped is not None:
             ok, reason = False, "fell"
             note = f"dropped {self.w.dropped!r} in transit" + (f"; {note}" if note else "")
         return self._step(ExecutedStep(
             "navigate", ok, 0.0, goal=goal, path=passed, reason=reason, note=note,
-            arrival_error_m=round(math.dist((here.x, here.y), (goal.x, goal.y)), 4),
-            arrival_yaw_error_rad=round(abs(wrap(here.theta - goal.theta)), 4)))
+            arrival_error_m=error_m, arrival_yaw_error_rad=error_rad))
 
     def _path_to(self, goal: Pose2D) -> tuple[Point, ...]:
         """A new path to ``goal`` from where the base stands; when the planner cannot start

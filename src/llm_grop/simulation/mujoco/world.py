@@ -273,15 +273,21 @@ class World:
 
     def touching_furniture(self) -> list[int]:
         """Furniture geoms the robot touches now."""
-        n = self.d.ncon
-        geoms = self.d.contact.geom[:n]
-        wm = self.wm
-        out = []
-        for a, b in geoms:
-            if wm.robot[a] and wm.furniture[b]:
-                out.append(int(b))
-            elif wm.robot[b] and wm.furniture[a]:
-                out.append(int(a))
+        return [g for g, _ in self._furniture_contacts()]
+
+    def furniture_contact_points(self) -> list[tuple[float, float]]:
+        """Where the robot touches furniture now (room frame, metres)."""
+        return [xy for _, xy in self._furniture_contacts()]
+
+    def _furniture_contacts(self) -> list[tuple[int, tuple[float, float]]]:
+        """Each contact between the robot and furniture now: the furniture geom and where
+        (room frame, metres)."""
+        wm, out = self.wm, []
+        for k in range(self.d.ncon):
+            a, b = (int(g) for g in self.d.contact.geom[k])
+            if wm.robot[a] and wm.furniture[b] or wm.robot[b] and wm.furniture[a]:
+                pos = self.d.contact.pos[k]
+                out.append((b if wm.furniture[b] else a, (float(pos[0]), float(pos[1]))))
         return out
 
     # -- the base ---------------------------------------------------------------------
@@ -311,16 +317,6 @@ class World:
         moved = max(((n, math.dist(before[n], now[n])) for n in before),
                     key=lambda m: m[1], default=None)
         return moved if moved is not None and moved[1] > 1e-3 else None
-
-    def furniture_contact_points(self) -> list[tuple[float, float]]:
-        """Where the robot touches furniture now (room frame, metres)."""
-        out = []
-        for k in range(self.d.ncon):
-            a, b = self.d.contact.geom[k]
-            if (self.wm.robot[a] and self.wm.furniture[b]) or \
-                    (self.wm.robot[b] and self.wm.furniture[a]):
-                out.append((float(self.d.contact.pos[k][0]), float(self.d.contact.pos[k][1])))
-        return out
 
     # -- the arm ----------------------------------------------------------------------
     def arm_q(self) -> np.ndarray:
