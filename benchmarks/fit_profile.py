@@ -15,12 +15,14 @@ profile. Prints, per method and chair count:
 ``--fit`` fits a profile by maximum likelihood: navigation success against the goal's
 clearance, pick and place success against the reach from where the base really stood (one
 reach curve fitted to every attempt; a pick's and a place's top fitted to first
-attempts), the actions' mean durations, and what a failed attempt costs with its recovery;
-it prints tipping after a place by object kind. ``--write`` stores the fit as the ``mujoco`` profile
+attempts), the actions' mean durations, a drive's overhead over the planned legs driven as
+planned, and what a failed attempt costs with its recovery (these two from the episodes
+that kept their goals, i.e. saved by this version); it prints tipping after a place by
+object kind. ``--write`` stores the fit as the ``mujoco`` profile
 in src/llm_grop/data/feasibility.yaml.
 ``--save FILE`` keeps the measurements; ``--also FILE ...`` fits to earlier runs' too, so
 that a profile can be re-fitted to the plans made with it (the belief moves the plans).
-Run: .venv/bin/python benchmarks/fit_profile.py [--simulator mujoco] [--seeds 20]
+Run: .venv/bin/python benchmarks/fit_profile.py [--simulator mujoco] [--seeds 20] [--first-seed 0]
      [--feasibility default] [--truth PROFILE] [--fit] [--write] [--save F] [--also F...]
 """
 
@@ -43,7 +45,8 @@ from common import median_p95, replay_llm
 from scipy.optimize import minimize_scalar
 
 from llm_grop.api import run
-from llm_grop.experiment.calibration import Sample, fit
+from llm_grop.errors import Infeasible
+from llm_grop.experiment.calibration import Sample, fit, likelihood_p
 from llm_grop.geometry.motion import leg_duration_s
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.planning.feasibility import ParametricFeasibility
@@ -54,13 +57,18 @@ PROFILES = Path(__file__).resolve().parents[1] / "src/llm_grop/data/feasibility.
 KINDS = ("navigate", "pick", "place")
 
 
-def episode(job: tuple[str, int, int, str, str, str | None]) -> dict[str, Any]:
-    """One Task 8 episode's measurements (plain data, for the parent process)."""
+def episode(job: tuple[str, int, int, str, str, str | None]) -> dict[str, Any] | None:
+    """One Task 8 episode's measurements (plain data, for the parent process); ``None``
+    when nothing feasible was found to execute."""
     method, chairs, seed, simulator, feasibility, truth = job
     sim = create_simulator(simulator, truth=truth)
     t0 = time.perf_counter()
-    r = run(task=8, seed=seed, llm=replay_llm(), method=method, chairs=chairs, simulator=sim,
-            feasibility=feasibility)
+    try:
+        r = run(task=8, seed=seed, llm=replay_llm(), method=method, chairs=chairs,
+                simulator=sim, feasibility=feasibility)
+    except Infeasible as e:
+        print(f"{method}, {chairs} chairs, seed {seed}: skipped, {e}", flush=True)
+        return None
     wall = time.perf_counter() - t0
     scene, robot = r.scene, r.scene.robot
     obstacles = Obstacles(scene, include_chairs=True)
@@ -82,9 +90,11 @@ def episode(job: tuple[str, int, int, str, str, str | None]) -> dict[str, Any]:
             continue
         attempts.append({"action": s.action, "x": x, "ok": s.ok, "attempt": s.attempt,
                          "reason": s.reason, "duration_s": s.duration_s,
-                         "object": s.object, "arrival_m": s.arrival_error_m})
+                         "object": s.object, "arrival_m": s.arrival_error_m,
+                         "goal": [s.goal.x, s.goal.y] if s.goal is not None else None})
     planned_legs = [(st.duration_s, leg_duration_s(_prev(r.plan.steps, k, scene), st.goal,
-                                                    st.path, robot))
+                                                    st.path, robot), st.goal.x, st.goal.y,
+                     st.object)
                     for k, st in enumerate(r.plan.steps) if st.action == "navigate"]
     return {"method": method, "chairs": chairs, "seed": seed, "wall_s": wall,
             "success": r.success, "all_placed": not r.execution.unplaced,
@@ -179,19 +189,20 @@ def fitted(rows: list[dict[str, Any]]) -> dict[str, float | None]:
 
     pick_s = [a["duration_s"] for a in attempts if a["action"] == "pick" and a["ok"]]
     place_s = [a["duration_s"] for a in attempts if a["action"] == "place" and a["ok"]]
-    # The overhead of a drive: what it took beyond its path and turns at full speed.
-    overhead = [a["duration_s"] - planned for r in rows
-                for a, (_, planned) in zip([a for a in r["attempts"]
-                                            if a["action"] == "navigate" and a["ok"]],
-                                           r["planned_legs"], strict=False)]
+    # The overhead of a drive: what it took beyond its path and turns at full speed, over
+    # the planned legs driven as planned (a leg's first attempt at its own goal).
+    overhead = [a["duration_s"] - leg[1] for r in rows for a, leg in _as_planned(r)]
     leg_s, pick_mean, place_mean = max(0.0, mean(overhead)), mean(pick_s), mean(place_s)
     # What a failed attempt costs, its recovery included (drives back, re-grasps, putting
     # back what it disturbed): each episode's time beyond its plan when nothing fails,
-    # shared among its failed attempts.
-    extra = sum(r["execution_s"] - sum(base + leg_s for _, base in r["planned_legs"])
+    # shared among its failed attempts. Like the overhead, from the episodes that kept
+    # their goals: the latest runs, planned with the latest belief, whose mix of failures
+    # the profile will meet (an early fit's plans fail far more, and differently).
+    timed = [r for r in rows if _as_planned(r)] or rows
+    extra = sum(r["execution_s"] - sum(leg[1] + leg_s for leg in r["planned_legs"])
                 - len(r["predicted"]["pick"]) * pick_mean
-                - len(r["predicted"]["place"]) * place_mean for r in rows)
-    failures = sum(r["failures"] for r in rows)
+                - len(r["predicted"]["place"]) * place_mean for r in timed)
+    failures = sum(r["failures"] for r in timed)
     kinds: Counter[str] = Counter(o for r in rows for o in r["tipped"])
     placed: Counter[str] = Counter(a["object"] for a in attempts if a["action"] == "place")
     print("tipped after a place, by object: " + (", ".join(
@@ -205,6 +216,25 @@ def fitted(rows: list[dict[str, Any]]) -> dict[str, float | None]:
             "failed_attempt_s": round(max(0.0, extra / failures), 2) if failures else 0.0}
 
 
+def _as_planned(row: dict[str, Any]) -> list[tuple[dict[str, Any], Any]]:
+    """The episode's successful drives that drove a planned leg as planned, each with its
+    leg: in plan order, the next first attempt at the leg's goal for the leg's object."""
+    drives = [a for a in row["attempts"] if a["action"] == "navigate"]
+    if any(a.get("goal") is None for a in drives):
+        return []  # saved by an earlier version, which did not keep the goals
+    out, k = [], 0
+    for leg in row["planned_legs"]:
+        for j in range(k, len(drives)):
+            a = drives[j]
+            if a["attempt"] == 1 and math.dist(a["goal"], leg[2:4]) < 1e-6 \
+                    and (len(leg) < 5 or a["object"] == leg[4]):
+                if a["ok"]:
+                    out.append((a, leg))
+                k = j + 1
+                break
+    return out
+
+
 def _top(observed: list[Sample], shape: ParametricFeasibility, robot: Robot, place: bool
          ) -> float:
     """The curve's top that makes ``observed`` most likely, its shape kept."""
@@ -213,7 +243,7 @@ def _top(observed: list[Sample], shape: ParametricFeasibility, robot: Robot, pla
 
     def nll(top: float) -> float:
         m = replace(shape, manip_max=top, place_max=top)
-        q = np.clip(m.placing(x, robot) if place else m.manipulation(x, robot), 1e-4, 1 - 1e-4)
+        q = likelihood_p(m.placing(x, robot) if place else m.manipulation(x, robot))
         return float(-np.sum(y * np.log(q) + (1 - y) * np.log(1 - q)))
 
     return round(float(minimize_scalar(nll, bounds=(0.05, 1.0), method="bounded").x), 4)
@@ -237,6 +267,8 @@ def main() -> None:
     ap.add_argument("--truth", default=None)
     ap.add_argument("--feasibility", default="default")
     ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="run seeds first-seed .. first-seed + seeds - 1")
     ap.add_argument("--methods", default="grop,llm-grop")
     ap.add_argument("--chairs", default="1,4")
     ap.add_argument("--workers", type=int, default=2)
@@ -248,23 +280,23 @@ def main() -> None:
     args = ap.parse_args()
     jobs = [(m, int(c), s, args.simulator, args.feasibility, args.truth)
             for m in args.methods.split(",") for c in args.chairs.split(",")
-            for s in range(args.seeds)]
+            for s in range(args.first_seed, args.first_seed + args.seeds)]
     t0 = time.perf_counter()
     if args.seeds == 0:
         rows: list[dict[str, Any]] = []  # fit to saved episodes alone (--also)
     else:
         with multiprocessing.get_context("spawn").Pool(args.workers) as pool:
-            rows = pool.map(episode, jobs, chunksize=1)
+            rows = [r for r in pool.map(episode, jobs, chunksize=1) if r is not None]
     if args.save:
         args.save.write_text(json.dumps(rows), encoding="utf-8")
     print(f"{len(rows)} Task 8 episodes on {args.simulator}"
           f"{' (truth ' + args.truth + ')' if args.truth else ''}, belief "
           f"{args.feasibility}, {time.perf_counter() - t0:.0f} s wall on {args.workers} "
           f"workers")
-    if rows:
-        report(rows)
+    earlier = [r for path in args.also for r in json.loads(path.read_text("utf-8"))]
+    if rows or earlier:
+        report(rows or earlier)  # with --seeds 0, the saved episodes' figures
     if args.fit or args.write:
-        earlier = [r for path in args.also for r in json.loads(path.read_text("utf-8"))]
         profile = fitted(rows + earlier)
         print("fitted: " + ", ".join(f"{k} {v}" for k, v in profile.items()))
         if args.write:

@@ -24,7 +24,8 @@ class ScriptedSession:
     """Outcomes per action, consumed in order: ``"ok"``, or a reason (``navigate`` may also
     be ``dropped``: the held object falls to the floor on the way). For ``place``:
     ``contact`` and ``no_ik`` keep the object in the hand; ``slid``, ``tipped`` and
-    ``fell`` let go and leave it 5 cm off, on its side, or on the floor. ``hooks`` run
+    ``fell`` let go and leave it 5 cm off, on its side, or on the floor; ``on:NAME`` at
+    its target, resting on ``NAME``. ``hooks`` run
     after the call with that index (0-based) and may move objects."""
 
     scene: Scene
@@ -123,6 +124,10 @@ class ScriptedSession:
         if outcome == "ok":
             z = top + (0.02 if on else 0.0)
             self.states[name] = ObjectState(name, q.x, q.y, z, q.theta, 0.0, target, on)
+        elif outcome.startswith("on:"):
+            # It comes to rest at the target, but on top of another object.
+            self.states[name] = ObjectState(name, q.x, q.y, top + 0.01, q.theta, 0.0, target,
+                                            outcome[3:])
         elif outcome == "slid":
             self.states[name] = ObjectState(name, q.x + 0.05, q.y, top, q.theta, 0.0, target)
         elif outcome == "tipped":

@@ -3,12 +3,14 @@ the same policy path, whichever simulator would have produced them."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import pytest
 
 from llm_grop.errors import BadInput
 from llm_grop.execution import ExecutionPolicy, execute_plan
+from llm_grop.execution.judge import CLEAR_GAP_M, clear_of
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import PlanningContext
@@ -103,6 +105,24 @@ def test_an_object_that_slid_is_regrasped_and_placed_again() -> None:
     assert not slid.ok and slid.reason == "slid" and "5.0 cm from its target" in slid.note
     assert ex.steps[4].action == "pick" and ex.steps[4].attempt == 2
     assert ex.steps[5].ok and ex.steps[5].attempt == 2
+    assert ex.success
+
+
+def test_a_place_that_fails_the_same_way_twice_is_not_tried_a_third_time() -> None:
+    # Both attempts leave the object 5 cm off its target, at the same spot.
+    ex, session, plan = run(FLAT, {"place": ["slid", "slid", "ok"]})
+    first = plan.order[0]
+    assert [w for a, w in session.calls if a == "place"].count(first) == 2
+    assert dict(ex.unplaced_reasons)[first] == "slid"
+    assert ex.unplaced == (first,)  # the others are placed
+
+
+def test_an_attempt_that_never_left_the_hand_breaks_a_repeat() -> None:
+    # Slid, then beyond reach (moved to another standing position), then slid to the
+    # same spot: not twice in a row, so it is tried again.
+    ex, session, plan = run(FLAT, {"place": ["slid", "no_ik", "slid", "ok"]})
+    first = plan.order[0]
+    assert [w for a, w in session.calls if a == "place"].count(first) == 4
     assert ex.success
 
 
@@ -251,3 +271,48 @@ def test_an_object_knocked_over_is_not_picked_again() -> None:
                          hooks={pick: lambda s: s.move(first, 0.0, tilt_rad=1.5)})
     assert session.calls.count(("pick", first)) == 1
     assert dict(ex.unplaced_reasons)[first] == "tipped"
+
+
+def test_an_object_that_goes_on_another_is_aimed_at_its_support_where_it_lies() -> None:
+    scene, plan = plan_for(*STACK)
+    index = [s.action for s in plan.steps].index("place")
+    # The plate comes to rest 2 cm off its target, within tolerance.
+    ex, session, _ = run(STACK, hooks={index: lambda s: s.move("dinner plate", 0.02)})
+    states = session.objects()
+    assert states["bread"].on == "dinner plate"
+    assert (states["bread"].x, states["bread"].y) == pytest.approx(
+        (states["dinner plate"].x, states["dinner plate"].y))
+    assert ex.success and ex.failures == 0
+
+
+def test_a_place_that_came_to_rest_on_another_object_aims_beside_it_next() -> None:
+    close = (placement("dinner plate", 0.0, -0.05),
+             placement("dinner knife", 0.16, -0.05, "box", (0.025, 0.2)))
+    scene, plan = plan_for(*close)
+    first, second = plan.order
+    targets = {p.name: scene.table_to_room(p.x, p.y) for p in close}
+    toward = (targets[second].x - targets[first].x, targets[second].y - targets[first].y)
+    step = 0.015 / math.hypot(*toward)
+    index = [s.action for s in plan.steps].index("place")
+    # The first object comes to rest 1.5 cm towards the second's spot (within tolerance),
+    # and the second, put down at its target, lands on it.
+    ex, session, _ = run(close, {"place": ["ok", f"on:{first}"]}, hooks={
+        index: lambda s: s.move(first, step * toward[0], step * toward[1])})
+    assert [w for a, w in session.calls if a == "place"] == [first, second, second]
+    failed = next(s for s in ex.steps if s.action == "place" and not s.ok)
+    assert failed.reason == "wrong_support" and failed.object == second
+    states = session.objects()
+    assert states[second].on is None and ex.success
+    moved = math.hypot(states[second].x - targets[second].x,
+                       states[second].y - targets[second].y)
+    assert 0.0 < moved <= 0.8 * ExecutionPolicy().max_offset_m
+
+
+def test_a_target_is_moved_clear_only_within_the_limit() -> None:
+    lid = placement("mug lid", 0.0, 0.0, size=(0.095, 0.095))
+    knife = placement("dinner knife", 0.055, 0.0, "box", (0.02, 0.23))
+    x, y = clear_of(0.0, 0.0, lid, knife, 0.024)  # type: ignore[misc]
+    assert y == 0.0 and -0.024 <= x < 0.0
+    assert math.isclose(0.055 - 0.01 - (x + 0.0475), CLEAR_GAP_M, abs_tol=0.002)
+    assert clear_of(0.0, 0.0, lid, knife, 0.005) is None
+    assert clear_of(-0.2, 0.0, lid, knife, 0.024) == (-0.2, 0.0)  # already clear

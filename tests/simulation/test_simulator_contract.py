@@ -40,7 +40,8 @@ def check_execution(ex: Execution, plan: Plan, scene: Scene,
                     policy: ExecutionPolicy | None = None) -> None:
     """The final arrangement is valid, the steps agree with it, and success is physical:
     it holds exactly when every object rests upright on its intended support, within
-    tolerance of its target."""
+    tolerance of its target (for an object on another, its target moved with its
+    support)."""
     policy = policy or ExecutionPolicy()
     names = [p.name for p in ex.final]
     assert len(names) == len(set(names)) and set(names) <= set(plan.order)
@@ -55,10 +56,19 @@ def check_execution(ex: Execution, plan: Plan, scene: Scene,
         assert p.tilt_rad >= 0 and p.z_m >= -0.01, p
     targets = {p.name: p for p in plan.configuration}
 
+    def goal(name: str) -> tuple[float, float]:
+        # An object that goes on another belongs where its support really lies.
+        t = targets[name]
+        support = final.get(t.on or "")
+        if support is None:
+            return t.x, t.y
+        return (t.x + support.x - targets[support.name].x,
+                t.y + support.y - targets[support.name].y)
+
     def in_place(name: str) -> bool:
         p, t = final.get(name), targets[name]
         return (p is not None and p.tilt_rad <= policy.max_tilt_rad and p.on == t.on
-                and math.dist((p.x, p.y), (t.x, t.y)) <= policy.max_offset_m + 1e-4)
+                and math.dist((p.x, p.y), goal(name)) <= policy.max_offset_m + 1e-4)
 
     assert ex.success == all(in_place(n) for n in plan.order)
     assert set(ex.unplaced) == {n for n in plan.order if not in_place(n)}

@@ -2,7 +2,8 @@
 
 An object is in place when it is not in the hand, lies on the target table, stands
 upright, rests on its intended support (the table, or the object it should be on) and
-lies within tolerance of its target. Otherwise the first of these that fails says why.
+lies within tolerance of its target (the executive translates the target of an object that
+goes on another with its support). Otherwise the first of these that fails says why.
 """
 
 from __future__ import annotations
@@ -11,9 +12,13 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
+import numpy as np
+from shapely.geometry import Polygon
+
 from llm_grop.execution.policy import ExecutionPolicy
 from llm_grop.simulation.base import Session
 from llm_grop.world.arrangement import Placement
+from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.plan import ExecutedStep, ObjectState, Reason
 from llm_grop.world.scene import Scene
 
@@ -37,17 +42,19 @@ def judge(state: ObjectState, target: tuple[float, float], on: str | None, scene
 
 
 def judged_place(session: Session, scene: Scene, name: str, x: float, y: float, yaw: float,
-                 on: str | None, policy: ExecutionPolicy) -> tuple[ExecutedStep, ObjectState]:
+                 on: str | None, policy: ExecutionPolicy,
+                 target: tuple[float, float] | None = None) -> tuple[ExecutedStep, ObjectState]:
     """One place attempt of ``name`` at ``(x, y, yaw)`` (table frame) on ``on``, judged where
-    the object came to rest: a released object out of place makes the step fail with the
-    reason. The step (its ``pose`` where the object lies, table frame) and the object's
-    state."""
+    the object came to rest against ``target`` (table frame, metres; ``None``: ``(x, y)``):
+    a released object out of place makes the step fail with the reason. The step (its
+    ``pose`` where the object lies, table frame) and the object's state."""
     done = session.place(name, x, y, yaw, on)
     state = session.objects()[name]
+    goal = (x, y) if target is None else target
     if done.ok:
-        why = judge(state, (x, y), on, scene, policy)
+        why = judge(state, goal, on, scene, policy)
         if why is not None:
-            done = replace(done, ok=False, reason=why, note=_words(why, state, (x, y), scene))
+            done = replace(done, ok=False, reason=why, note=_words(why, state, goal, scene))
         done = replace(done, pose=table_pose(state, scene))
     return done, state
 
@@ -86,3 +93,33 @@ def final_placements(states: Mapping[str, ObjectState], shapes: Sequence[Placeme
         out.append(replace(p, x=x, y=y, yaw=yaw, on=s.on, z_m=round(s.z - top, 4),
                            tilt_rad=round(s.tilt_rad, 4)))
     return tuple(out)
+
+
+#: A nudged target keeps a footprint this far from the object it landed on, metres.
+CLEAR_GAP_M = 0.004
+
+
+def clear_of(x: float, y: float, mine: Placement, other: Placement, limit_m: float
+             ) -> tuple[float, float] | None:
+    """A target near ``(x, y)`` (table frame, metres) where ``mine`` at its yaw keeps
+    :data:`CLEAR_GAP_M` from ``other`` as it lies, moved straight away from ``other`` by at
+    most ``limit_m``; ``None`` when none is that near (or ``(x, y)`` is ``other``'s centre).
+    Where a place came to rest on an object it should not, the next attempt aims beside
+    it, as a robot that sees the obstacle would."""
+    theirs = _footprint(other, other.x, other.y)
+    away = np.array([x - other.x, y - other.y])
+    if float(np.hypot(*away)) < 1e-6:
+        return None
+    away /= np.hypot(*away)
+    for d in np.arange(0.0, limit_m + 1e-9, 0.002):
+        cx, cy = x + d * float(away[0]), y + d * float(away[1])
+        if _footprint(mine, cx, cy).distance(theirs) >= CLEAR_GAP_M:
+            return round(cx, 4), round(cy, 4)
+    return None
+
+
+def _footprint(p: Placement, x: float, y: float) -> Polygon:
+    """``p``'s footprint centred at ``(x, y)`` at its own yaw (table frame)."""
+    shape = Disc(x, y, p.size[0] / 2) if p.shape == "circle" \
+        else Box(x, y, p.size[0], p.size[1], p.yaw)
+    return Polygon(shape.outline())

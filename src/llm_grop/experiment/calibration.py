@@ -177,7 +177,7 @@ def _fit(parts: Sequence[tuple[Sequence[Sample],
     def nll(p: np.ndarray) -> float:
         total = 0.0
         for x, y, model in data:
-            q = np.clip(model(p, x), 1e-4, 1 - 1e-4)
+            q = likelihood_p(model(p, x))
             total -= float(np.sum(y * np.log(q) + (1 - y) * np.log(1 - q)))
         return total
 
@@ -188,6 +188,18 @@ def _fit(parts: Sequence[tuple[Sequence[Sample],
             best = r
     assert best is not None
     return [round(float(v), 4) for v in best.x]
+
+
+#: The floor and ceiling a fitted success probability is squeezed into, so that one
+#: outcome the curve calls certain does not make the likelihood infinite.
+P_FLOOR = 1e-4
+
+
+def likelihood_p(p: np.ndarray) -> np.ndarray:
+    """Probabilities ``p`` squeezed linearly into ``[P_FLOOR, 1 - P_FLOOR]``. A clip would
+    leave the likelihood flat where the curve saturates, and the optimiser stranded
+    there (a navigation top of 1.0 with failures on record)."""
+    return P_FLOOR + (1.0 - 2.0 * P_FLOOR) * np.asarray(p, dtype=float)
 
 
 def rates(samples: Sequence[Sample]) -> dict[float, tuple[int, int]]:

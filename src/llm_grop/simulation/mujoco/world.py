@@ -44,6 +44,11 @@ FRICTION_CONDIM = 6
 PAD_FRICTION = (1.5, 0.012, 0.012)
 #: MuJoCo's impratio with the friction grasp (1 otherwise).
 FRICTION_IMPRATIO = 10.0
+#: With the friction grasp, each finger squeezes shut with this force plus its position
+#: servo's pull, newtons (a force-limited gripper's grip force; 60 N at most).
+FRICTION_SQUEEZE_N = 20.0
+#: ... and a finger's reflected inertia, kg (the transmission's armature; 0.01 otherwise).
+FRICTION_FINGER_ARMATURE = 0.2
 #: A body is "on" a surface when its bottom is within this height of the surface, metres.
 REST_TOL_M = 0.015
 
@@ -112,6 +117,13 @@ class World:
             # ratio of frictional to normal impedance stops the creep, as MuJoCo's
             # documentation advises for grasping.
             self.m.opt.impratio = FRICTION_IMPRATIO
+            # Without the weld the squeeze alone holds, so it must not depend on how wide
+            # the object is (a position servo pulls a 3 cm plate rim with 8 N, a mug with
+            # 26 N); and a finger as light as the default chatters against the stiff pad
+            # contact, so the squeeze flickers and the grip test fails.
+            self.m.actuator_ctrlrange[self.finger_ctrl, 0] = -1.0
+            self.m.dof_armature[[m.joint(n).dofadr[0] for n in ("finger_left", "finger_right")]] \
+                = FRICTION_FINGER_ARMATURE
         #: Width, metres, of the object between the pads at the last grasp.
         self.grip_width = 0.05
         start = scene.robot_start
@@ -352,6 +364,8 @@ class World:
         if self.held is not None and opening_m > self.grip_opening:
             self.hold(None)
         q = min(max((opening_m - PAD_GAP_M) / 2, 0.0), 0.07)
+        if q == 0.0 and self.grasp == "friction":
+            q = -FRICTION_SQUEEZE_N / float(self.m.actuator_gainprm[self.finger_ctrl[0], 0])
         self.d.ctrl[self.finger_ctrl] = q
         self.advance(seconds)
 
