@@ -9,12 +9,16 @@ the same bytes.
 
 from __future__ import annotations
 
+import functools
 import math
 import textwrap
+import zlib
 from collections.abc import Sequence
+from importlib import resources
 from pathlib import Path
 
 import matplotlib
+import yaml
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
@@ -60,10 +64,23 @@ STYLE = {"font.family": "DejaVu Sans", "font.size": 9.0, "axes.linewidth": 0.8,
           "ytick.color": "#444444", "axes.labelcolor": "#222222"}
 
 
+@functools.cache
+def _listed_colors() -> dict[str, str]:
+    """The kinds' colours of ``kind_colors.yaml``."""
+    text = resources.files("llm_grop.render").joinpath("kind_colors.yaml").read_text("utf-8")
+    return {str(k): str(v) for k, v in yaml.safe_load(text).items()}
+
+
+def kind_color(kind: str) -> str:
+    """The colour of ``kind`` in every picture: listed in ``kind_colors.yaml``, else a
+    palette colour picked from its name (the same in every run)."""
+    listed = _listed_colors().get(kind)
+    return listed if listed is not None else PALETTE[zlib.crc32(kind.encode()) % len(PALETTE)]
+
+
 def kind_colors(placements: Sequence[Placement]) -> dict[str, str]:
-    """The colour of each kind among ``placements``: distinct for up to ten kinds."""
-    kinds = sorted({p.kind or p.name for p in placements})
-    return {k: PALETTE[i % len(PALETTE)] for i, k in enumerate(kinds)}
+    """The colour of each kind among ``placements`` (:func:`kind_color`)."""
+    return {k: kind_color(k) for k in sorted({p.kind or p.name for p in placements})}
 
 
 def draw_arrangement(arrangement: Arrangement, path: str | Path, *, title: str | None = None,
