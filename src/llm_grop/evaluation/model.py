@@ -24,6 +24,7 @@ from shapely.geometry.base import BaseGeometry
 
 from llm_grop.errors import BadInput
 from llm_grop.evaluation.conventions import Conventions
+from llm_grop.geometry.footprint import footprint
 from llm_grop.world.arrangement import UPRIGHT_TILT_RAD
 from llm_grop.world.catalog import Catalog, normalize_name
 from llm_grop.world.contract import ArrangementDoc, ObjectDoc
@@ -146,18 +147,6 @@ def kind_of(name: str, catalog: Catalog) -> str:
     base = _NUMBERED.sub("", normalize_name(name))
     spec = catalog.lookup(base)
     return spec.name if spec is not None else base
-
-
-def footprint(x: float, y: float, yaw: float, shape: str, size: tuple[float, float]
-              ) -> BaseGeometry:
-    """The footprint polygon in the table frame (a circle of diameter ``size[0]``, or a
-    ``size`` box turned by ``yaw`` radians counter-clockwise)."""
-    if shape == "circle":
-        return Point(x, y).buffer(size[0] / 2, quad_segs=32)
-    c, s = math.cos(yaw), math.sin(yaw)
-    hx, hy = size[0] / 2, size[1] / 2
-    return Polygon([(x + c * u - s * v, y + s * u + c * v)
-                    for u, v in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))])
 
 
 def _read_object(i: int, o: ObjectDoc, where: str, catalog: Catalog) -> Obj:

@@ -13,12 +13,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
-from shapely.geometry import Polygon
 
 from llm_grop.execution.policy import ExecutionPolicy
+from llm_grop.geometry.footprint import footprint
 from llm_grop.simulation.base import Session
 from llm_grop.world.arrangement import Placement
-from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.plan import ExecutedStep, ObjectState, Reason
 from llm_grop.world.scene import Scene
 
@@ -106,20 +105,13 @@ def clear_of(x: float, y: float, mine: Placement, other: Placement, limit_m: flo
     most ``limit_m``; ``None`` when none is that near (or ``(x, y)`` is ``other``'s centre).
     Where a place came to rest on an object it should not, the next attempt aims beside
     it, as a robot that sees the obstacle would."""
-    theirs = _footprint(other, other.x, other.y)
+    theirs = footprint(other.x, other.y, other.yaw, other.shape, other.size)
     away = np.array([x - other.x, y - other.y])
     if float(np.hypot(*away)) < 1e-6:
         return None
     away /= np.hypot(*away)
     for d in np.arange(0.0, limit_m + 1e-9, 0.002):
         cx, cy = x + d * float(away[0]), y + d * float(away[1])
-        if _footprint(mine, cx, cy).distance(theirs) >= CLEAR_GAP_M:
+        if footprint(cx, cy, mine.yaw, mine.shape, mine.size).distance(theirs) >= CLEAR_GAP_M:
             return round(cx, 4), round(cy, 4)
     return None
-
-
-def _footprint(p: Placement, x: float, y: float) -> Polygon:
-    """``p``'s footprint centred at ``(x, y)`` at its own yaw (table frame)."""
-    shape = Disc(x, y, p.size[0] / 2) if p.shape == "circle" \
-        else Box(x, y, p.size[0], p.size[1], p.yaw)
-    return Polygon(shape.outline())
