@@ -44,7 +44,9 @@ FORBIDDEN: dict[str, set[str]] = {
     "env": {"evaluation", "experiment", "api", "cli", "methods", "ratings"},
     # The human study sits beside the bench: it reads results, never runs a pipeline.
     "ratings": {"cli", "api", "llm", "arrangement", "planning", "simulation", "methods",
-                "env", "render"},
+                "env", "render", "service"},
+    # The service calls the public API as the CLI does; it never rates, sweeps or studies.
+    "service": {"cli", "evaluation", "experiment", "ratings", "env"},
 }
 #: What a package marked ``*`` may still import.
 ALLOWED_BELOW = {"world": {"errors"}, "geometry": {"errors", "world"}}

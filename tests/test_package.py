@@ -14,7 +14,7 @@ import llm_grop
 from cli_support import REQUEST
 from cli_support import one_line_error as _one_line_error
 from llm_grop.cli import main
-from llm_grop.world.contract import json_schema
+from llm_grop.world.schemas import json_schema
 
 
 def test_python_dash_m_runs_the_command() -> None:
@@ -50,8 +50,10 @@ def test_schema_command_prints_the_schema(name: str, capsys) -> None:
 
 
 def test_schema_command_refuses_an_unknown_document(capsys) -> None:
-    assert main(["schema", "plan"]) == 2
-    assert "'plan' is not one of 'arrangement', 'run', 'trial'" in _one_line_error(capsys)
+    assert main(["schema", "plans"]) == 2
+    assert "'plans' is not one of 'arrangement', 'plan', 'run', 'trial'" in \
+        _one_line_error(capsys)
+
 
 
 def test_plugins_command_lists_every_kind(capsys) -> None:

@@ -4,22 +4,24 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from llm_grop.arrangement.diners import seat_items, seat_table
 from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
 from llm_grop.arrangement.stated import check_stated
 from llm_grop.errors import BadInput
 from llm_grop.execution import ExecutionPolicy
+from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.language import understanding
 from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
 from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import available_methods, get_method
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR, available_simulators
-from llm_grop.world.arrangement import Item
+from llm_grop.world.arrangement import Arrangement, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import Request, items_from_names
 from llm_grop.world.scene import Scene
@@ -27,12 +29,30 @@ from llm_grop.world.table import Table
 from llm_grop.world.tasks import Task, get_task, load_tasks
 
 if TYPE_CHECKING:
+    from llm_grop.methods.base import EpisodeInput
+    from llm_grop.methods.episode import PlannedEpisode
     from llm_grop.planning.utility import GropOptions
     from llm_grop.simulation.base import Simulator
     from llm_grop.world.plan import RunResult
 
-__all__ = ["arrange", "available_methods", "available_simulators", "make_llm",
-           "resolve_items", "run", "understand"]
+__all__ = ["PlanResult", "arrange", "available_methods", "available_simulators", "execute",
+           "make_llm", "plan", "plan_from_dict", "plan_to_dict", "resolve_items", "run",
+           "understand"]
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A task-motion plan from :func:`plan`, not yet executed: the method's name, the
+    paper's task (``None`` for a free request), what the method was given (request, items,
+    table, seed), the arrangement and plan in their episode's scene, the planner's options
+    and the attempts per pick and place the executive allows the method."""
+
+    method: str
+    task: int | None
+    input: EpisodeInput
+    planned: PlannedEpisode
+    planner: GropOptions | None
+    manip_attempts: int
 
 
 def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
@@ -142,26 +162,59 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     replaces the paper's Table I for ``task``; ``guess=False`` refuses a request whose
     reading needs the LLM to choose objects; ``execution`` sets the executive's attempt
     counts and place tolerances (default: the authors' counts, 20 manipulation attempts
-    for LLM-GROP and 10 for the baselines). The same seed gives the same run.
+    for LLM-GROP and 10 for the baselines). The same seed gives the same run: it is
+    :func:`plan` followed by :func:`execute`.
     """
-    # Planning pulls in OMPL and scipy; import them only when a run needs them.
-    from llm_grop.methods.base import EpisodeInput
-    from llm_grop.methods.episode import run_episode
-    from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.registry import create_simulator
+
+    sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
+    planned = plan(request, task=task, method=method, scene=scene, chairs=chairs, table=table,
+                   seed=seed, llm=llm, llm_options=llm_options, catalog=catalog,
+                   catalog_files=catalog_files, options=options, record=record,
+                   planner=planner, feasibility=feasibility, tasks=tasks, on_event=on_event,
+                   guess=guess, check=getattr(sim, "check", None))
+    return execute(planned, simulator=sim, execution=execution)
+
+
+def plan(request: str | None = None, *, task: int | None = None,
+         arrangement: Arrangement | None = None, method: str = "llm-grop",
+         scene: Scene | str | PathLike[str] | None = None, chairs: int | None = None,
+         table: Table | None = None, seed: int = 0, llm: str | LLM | CallLog = "embedded",
+         llm_options: BackendOptions | None = None, catalog: Catalog | None = None,
+         catalog_files: Sequence[str | PathLike[str]] = (),
+         options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
+         planner: GropOptions | None = None, feasibility: str = "default",
+         tasks: Mapping[int, Task] | None = None,
+         on_event: Callable[[str], None] | None = None, guess: bool = True,
+         check: Callable[[Scene, Sequence[Item]], None] | None = None) -> PlanResult:
+    """Arrange and plan, without executing: what :func:`run` does before the simulator
+    starts, for a robot stack to execute (the arguments are :func:`run`'s).
+
+    With ``arrangement`` (an :class:`Arrangement`, e.g. read with
+    :func:`~llm_grop.world.serialize.arrangement_from_dict`) instead of a request, its
+    placements are planned for as they are, on its table, and no LLM is asked; ``method``
+    then only chooses how standing positions are picked. ``check(scene, items)`` may refuse
+    the episode before any work (a simulator's own check). :func:`execute` runs the plan.
+    """
+    from llm_grop.methods.base import EpisodeInput, GivenArrangement
+    from llm_grop.methods.episode import plan_episode
+    from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.scenario import prepare_episode
     from llm_grop.world.scene_file import load_scene, set_target_top
 
     catalog = catalog or Catalog.load(catalog_files)
     options = options or ArrangeOptions()
     chosen = get_method(method)
-    sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
     feasibility_profile(feasibility)  # an unknown profile is reported before any work
     base = scene if isinstance(scene, Scene) else load_scene(scene)
+    if arrangement is not None:
+        if request is not None or task is not None:
+            raise BadInput("arrangement: give a request, a task or an arrangement, not both")
+        table = arrangement.table
     if table is not None:
         base = set_target_top(base, table, keep_chairs=chairs is None)
     for k, source in enumerate(base.sources):
-        kind = re.sub(r"\s+\d+$", "", source.object)
+        kind = _NUMBERED.sub("", source.object)
         if catalog.lookup(kind) is None:
             where = f"{scene}: " if scene is not None and not isinstance(scene, Scene) else ""
             raise BadInput(f"{where}sources[{k}] ({source.object!r}).object: unknown object; "
@@ -175,16 +228,79 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
             made.append(make_llm(llm, llm_options, record))  # type: ignore[arg-type]
         return made[0]
 
-    reading = understand(request, task=task, catalog=catalog, tasks=tasks, llm=log, seed=seed,
-                         params=options.params, on_event=on_event, guess=guess,
-                         table=base.target_top)
+    if arrangement is not None:
+        reading = Request(arrangement.request, _given_items(arrangement, catalog))
+        chosen = GivenArrangement(chosen, arrangement)
+    else:
+        reading = understand(request, task=task, catalog=catalog, tasks=tasks, llm=log,
+                             seed=seed, params=options.params, on_event=on_event,
+                             guess=guess, table=base.target_top)
     items = seat_items(reading.items, base.target_top)  # a scene with seats: one setting each
     top = seat_table(base.target_top, items)  # too many diners: reported before any work
-    check = getattr(sim, "check", None)
     if check is not None:
         check(base, items)
     episode = prepare_episode(base, items, seed, chairs=chairs)
     inp = EpisodeInput(reading.text, items, top, seed, catalog,
                        log() if chosen.uses_llm else None, options, on_event, reading)
-    return run_episode(chosen, inp, episode, task=task, simulator=sim, planner=planner,
-                       model=feasibility, policy=execution)
+    planned = plan_episode(chosen, inp, episode, model=feasibility, planner=planner)
+    return PlanResult(chosen.name, task, inp, planned, planner,
+                      getattr(chosen, "manip_attempts", BASELINE_MANIP_ATTEMPTS))
+
+
+def execute(planned: PlanResult, *, simulator: str | Simulator = DEFAULT_SIMULATOR,
+            execution: ExecutionPolicy | None = None) -> RunResult:
+    """Execute a plan from :func:`plan` on ``simulator`` (a name or a simulator object): the
+    same run as :func:`run` with the same arguments and seed."""
+    from llm_grop.methods.episode import execute_episode
+    from llm_grop.simulation.registry import create_simulator
+
+    sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
+    return execute_episode(planned.planned, planned.input, task=planned.task, simulator=sim,
+                           method=planned.method, attempts=planned.manip_attempts,
+                           planner=planned.planner, policy=execution)
+
+
+#: A trailing instance number: "dinner fork 2" is of kind "dinner fork".
+_NUMBERED = re.compile(r"\s+\d+$")
+
+
+def _given_items(arrangement: Arrangement, catalog: Catalog) -> tuple[Item, ...]:
+    """The items of a given arrangement, each of its placement's catalog kind."""
+    origins = {name: (source, words) for name, source, words in arrangement.origins}
+    items = []
+    for k, p in enumerate(arrangement.placements):
+        kind = p.kind if p.kind and p.kind != p.name else _NUMBERED.sub("", p.name)
+        spec = catalog.resolve(kind, f"arrangement: objects[{k}].kind")
+        source, words = origins.get(p.name, ("request", ""))
+        items.append(Item(p.name, spec, p.diner, source, words))
+    return tuple(items)
+
+
+def plan_to_dict(planned: PlanResult) -> dict[str, Any]:
+    """The plan JSON of ``planned`` (:mod:`llm_grop.world.plan_doc`): the steps a robot stack
+    executes, in the contract's frames, at full precision."""
+    from llm_grop.world.plan_doc import plan_json
+
+    p = planned.planned
+    return plan_json(method=planned.method, task=planned.task, seed=planned.input.seed,
+                     request=planned.input.request, plan=p.plan, arrangement=p.arrangement,
+                     scene=p.scene, planning_time_s=p.planning_time_s,
+                     feasibility=p.feasibility,
+                     manip_attempts=planned.manip_attempts).to_json()
+
+
+def plan_from_dict(data: Mapping[str, Any], *, catalog: Catalog | None = None,
+                   where: str = "plan") -> PlanResult:
+    """A plan JSON read back (as :func:`plan_to_dict` wrote it), ready for :func:`execute`:
+    executing it gives the same run as executing the plan it was written from."""
+    from llm_grop.methods.base import EpisodeInput
+    from llm_grop.methods.episode import PlannedEpisode
+    from llm_grop.world.plan_doc import read_plan_json
+
+    catalog = catalog or Catalog.load()
+    doc, the_plan, arrangement, scene = read_plan_json(data, where)
+    items = _given_items(arrangement, catalog)
+    inp = EpisodeInput(doc.request, items, arrangement.table, doc.seed, catalog)
+    planned = PlannedEpisode(arrangement, the_plan, scene, doc.planning_time_s,
+                             doc.feasibility)
+    return PlanResult(doc.method, doc.task, inp, planned, None, doc.manip_attempts)

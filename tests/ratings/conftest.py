@@ -10,6 +10,7 @@ from types import ModuleType
 
 import pytest
 
+from browser_support import screenshots  # noqa: F401 - a fixture for the browser test
 from llm_grop.cli import main
 from llm_grop.ratings.study import create_study, invite, items_from_bench
 

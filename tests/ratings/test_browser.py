@@ -8,34 +8,14 @@ back on a phone at picture 6. Screenshots of the guidelines, rating and report p
 
 from __future__ import annotations
 
-import os
 import sqlite3
 from pathlib import Path
 
-import pytest
-from playwright.sync_api import Page, expect, sync_playwright
+from playwright.sync_api import expect, sync_playwright
 
+from browser_support import CHROMIUM, DESKTOP, FLAGS, PHONE, fits
 from conftest import load_benchmark
 from llm_grop.cli import main
-
-CHROMIUM = Path("/usr/bin/chromium")
-#: Flags for a headless Chromium with no network of its own (no sandbox: CI runs as root).
-FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-DESKTOP = {"width": 1100, "height": 900}
-PHONE = {"width": 390, "height": 844}
-
-
-@pytest.fixture
-def screenshots(tmp_path: Path) -> Path:
-    where = Path(os.environ.get("LLM_GROP_SCREENSHOTS") or tmp_path / "screenshots")
-    where.mkdir(parents=True, exist_ok=True)
-    return where
-
-
-def fits(page: Page) -> bool:
-    """Nothing sticks out sideways: no horizontal scrolling."""
-    return page.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
 
 
 def test_a_rater_rates_with_the_keyboard_leaves_and_comes_back(

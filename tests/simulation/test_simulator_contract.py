@@ -16,11 +16,11 @@ from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.simulation.registry import available_simulators, create_simulator
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.contract import json_schema
 from llm_grop.world.plan import REASONS, Execution, Plan
 from llm_grop.world.request import items_from_names
 from llm_grop.world.run_json import run_to_dict
 from llm_grop.world.scene import Scene
+from llm_grop.world.schemas import json_schema
 from scenes import config, placement, two_table_room
 
 NAMES = ["dinner plate", "bread", "dinner fork"]

@@ -16,6 +16,7 @@ from llm_grop.cli.rate import rate
 from llm_grop.cli.ratings import ratings
 from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
+from llm_grop.cli.serve import serve
 from llm_grop.cli.sweep import sweep
 from llm_grop.errors import LLMGropError
 
@@ -35,6 +36,7 @@ cli.add_command(rate)
 cli.add_command(ratings)
 cli.add_command(schema)
 cli.add_command(plugins)
+cli.add_command(serve)
 
 
 def main(argv: list[str] | None = None) -> int:

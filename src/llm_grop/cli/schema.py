@@ -6,14 +6,15 @@ import click
 
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
-from llm_grop.world.contract import DOCUMENTS, schema_text
+from llm_grop.world.schemas import DOCUMENTS, schema_text
 
 
 @click.command(epilog=EPILOG)
 @VERBOSE
 @click.argument("name", type=click.Choice(sorted(DOCUMENTS)))
 def schema(name: str) -> None:
-    """Print the JSON Schema of the arrangement JSON, the run JSON or a bench trial row.
+    """Print the JSON Schema of the arrangement JSON, the run JSON, a bench trial row or the
+    plan JSON (`llm-grop serve`).
 
     The same files are in docs/schema/ of the source tree; validate a file with any JSON
     Schema tool, e.g. `check-jsonschema --schemafile run.schema.json run.json`.

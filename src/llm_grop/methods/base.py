@@ -112,3 +112,42 @@ class ComposedMethod:
         arrangement = Arrangement(inp.request, inp.table, configs[0].placements)
         return Proposal(arrangement, configs, time.perf_counter() - t0)
 
+
+
+@dataclass(frozen=True)
+class GivenArrangement:
+    """A method planning for an arrangement it is given (a robot stack's, or one written
+    by ``llm-grop arrange``): that one configuration as it is, with ``base``'s standing
+    positions and attempt counts; no LLM is asked and nothing is sampled."""
+
+    base: Method
+    arrangement: Arrangement
+    uses_llm: bool = False
+
+    @property
+    def name(self) -> str:
+        """The base method's name."""
+        return self.base.name
+
+    @property
+    def description(self) -> str:
+        """What it does, in words."""
+        return f"{self.base.name} planning for a given arrangement"
+
+    @property
+    def standing(self) -> Literal["utility", "uniform"]:
+        """The base method's standing policy."""
+        return self.base.standing
+
+    @property
+    def best_of_all(self) -> bool:
+        """Whether the base method plans for every configuration (there is one here)."""
+        return self.base.best_of_all
+
+    @property
+    def manip_attempts(self) -> int:
+        """Attempts per pick and place: the base method's."""
+        return getattr(self.base, "manip_attempts", BASELINE_MANIP_ATTEMPTS)
+
+    def propose(self, inp: EpisodeInput) -> Proposal:
+        return Proposal(self.arrangement, (Configuration(self.arrangement.placements),), 0.0)

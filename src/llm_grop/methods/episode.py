@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from llm_grop import seeds
 from llm_grop.arrangement.diners import violations_at_table
@@ -21,11 +21,24 @@ from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import GropOptions, PlanningContext
 from llm_grop.simulation.base import Simulator
 from llm_grop.world.arrangement import Arrangement, Configuration
-from llm_grop.world.plan import Execution, RunResult
+from llm_grop.world.plan import Execution, Plan, RunResult
 from llm_grop.world.relation import Relation
 from llm_grop.world.scene import Scene
 
 log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PlannedEpisode:
+    """A method's plan before execution: the arrangement it proposed, the chosen plan, the
+    episode's scene (its chairs are the sensed ones), the planning time in seconds (LLM
+    calls excluded) and the name of the planner's feasibility profile."""
+
+    arrangement: Arrangement
+    plan: Plan
+    scene: Scene
+    planning_time_s: float
+    feasibility: str = "default"
 
 
 def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | None,
@@ -42,35 +55,64 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     Planning time counts the arrangement's computation without LLM calls, GROP and the
     OMPL paths. Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
     """
-    def say(message: str) -> None:
-        log.info(message)
-        if inp.on_event is not None:
-            inp.on_event(message)
+    planned = plan_episode(method, inp, scene, model=model, planner=planner)
+    return execute_episode(planned, inp, task=task, simulator=simulator, planner=planner,
+                           attempts=getattr(method, "manip_attempts", BASELINE_MANIP_ATTEMPTS),
+                           method=method.name, policy=policy)
 
+
+def plan_episode(method: Method, inp: EpisodeInput, scene: Scene, *,
+                 model: FeasibilityModel | str = "default",
+                 planner: GropOptions | None = None) -> PlannedEpisode:
+    """The first half of :func:`run_episode`: ``method``'s arrangement and the task-motion
+    plan for it in ``scene``, not executed."""
     proposal = method.propose(inp)
-    say(f"planning for {len(proposal.configurations)} configuration(s)")
+    _say(inp, f"planning for {len(proposal.configurations)} configuration(s)")
     t0 = time.perf_counter()
     profile = model if isinstance(model, str) else "custom"
     belief = feasibility_profile(model) if isinstance(model, str) else model
     ctx = PlanningContext(scene, inp.items, belief, planner)
     cand = choose(ctx, proposal.configurations, method.standing,
                   seeds.stream(inp.seed, "standing"), method.best_of_all, proposal.fidelity)
-    navigator = Navigator(scene, scene.robot.base_radius_m,
-                          time_limit_s=ctx.options.path_time_limit_s)
-    plan = build_plan(ctx, cand, navigator, inp.seed, len(proposal.configurations))
+    plan = build_plan(ctx, cand, navigator(scene, planner), inp.seed,
+                      len(proposal.configurations))
     planning_s = proposal.compute_time_s + time.perf_counter() - t0
-    say(f"executing the plan (configuration {plan.configuration_index + 1}, expected "
-        f"utility {plan.utility:.1f} s) with {simulator.name}")
-    attempts = getattr(method, "manip_attempts", BASELINE_MANIP_ATTEMPTS)
+    return PlannedEpisode(proposal.arrangement, plan, scene, planning_s, profile)
+
+
+def navigator(scene: Scene, planner: GropOptions | None = None) -> Navigator:
+    """The robot's own path planner in ``scene``, as GROP plans with it and the executive
+    replans with it."""
+    return Navigator(scene, scene.robot.base_radius_m,
+                     time_limit_s=(planner or GropOptions()).path_time_limit_s)
+
+
+def execute_episode(planned: PlannedEpisode, inp: EpisodeInput, *, task: int | None,
+                    simulator: Simulator, method: str, attempts: int,
+                    planner: GropOptions | None = None,
+                    policy: ExecutionPolicy | None = None) -> RunResult:
+    """The second half of :func:`run_episode`: ``planned`` executed by the executive on
+    ``simulator``, with ``attempts`` per pick and place unless ``policy`` sets them; the
+    simulator's randomness comes from the seed's ``simulator`` stream, so a plan executed
+    here gives the same run as :func:`run_episode` with the same seed."""
+    plan, scene = planned.plan, planned.scene
+    _say(inp, f"executing the plan (configuration {plan.configuration_index + 1}, expected "
+              f"utility {plan.utility:.1f} s) with {simulator.name}")
     execution = execute(simulator, plan, scene, inp.items, seeds.stream(inp.seed, "simulator"),
-                        replan=navigator,
+                        replan=navigator(scene, planner),
                         policy=(policy or ExecutionPolicy()).for_method(attempts))
-    planned = replace(proposal.arrangement, placements=plan.configuration)
-    return RunResult(method=method.name, task=task, seed=inp.seed, request=inp.request,
-                     planned=planned, plan=plan, execution=execution,
-                     final=final_arrangement(planned, execution),
-                     planning_time_s=planning_s, scene=scene, simulator=simulator.name,
-                     feasibility=profile)
+    arranged = replace(planned.arrangement, placements=plan.configuration)
+    return RunResult(method=method, task=task, seed=inp.seed, request=inp.request,
+                     planned=arranged, plan=plan, execution=execution,
+                     final=final_arrangement(arranged, execution),
+                     planning_time_s=planned.planning_time_s, scene=scene,
+                     simulator=simulator.name, feasibility=planned.feasibility)
+
+
+def _say(inp: EpisodeInput, message: str) -> None:
+    log.info(message)
+    if inp.on_event is not None:
+        inp.on_event(message)
 
 
 def final_arrangement(planned: Arrangement, execution: Execution) -> Arrangement:

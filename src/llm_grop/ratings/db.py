@@ -1,51 +1,26 @@
-"""The study database: one SQLite file in WAL mode, its schema kept by versioned migrations.
-
-Each migration is a file ``migrations/NNNN_name.sql`` beside this module, applied in order
-in one transaction each; the file's ``PRAGMA user_version`` is the last one applied. A file
-whose version is newer than this llm-grop knows, or that is not an llm-grop study, is
-refused with one line.
-"""
+"""The study database: one SQLite file in WAL mode (:mod:`llm_grop.database`), its schema
+kept by the migrations in ``migrations/`` beside this module."""
 
 from __future__ import annotations
 
-import contextlib
-import re
 import sqlite3
-from collections.abc import Iterator
-from dataclasses import dataclass
-from functools import cache
-from importlib import resources
 from pathlib import Path
 
-from llm_grop.errors import BadInput
+from llm_grop import database
+from llm_grop.database import BUSY_TIMEOUT_MS, Migration, transaction
+
+__all__ = ["APPLICATION_ID", "BUSY_TIMEOUT_MS", "Migration", "connect", "migrations",
+           "schema_version", "transaction"]
 
 #: ``PRAGMA application_id`` of a study database ("LGRP").
 APPLICATION_ID = 0x4C475250
-#: How long a connection waits for another writer before giving up, milliseconds.
-BUSY_TIMEOUT_MS = 10_000
-_NAME = re.compile(r"^(\d{4})_[a-z0-9_]+\.sql$")
+STUDY = database.Kind("llm_grop.ratings", APPLICATION_ID, "study database",
+                      "make one with 'llm-grop ratings create'")
 
 
-@dataclass(frozen=True)
-class Migration:
-    """One schema step: ``version`` (from 1) and its SQL script."""
-
-    version: int
-    name: str
-    sql: str
-
-
-@cache
 def migrations() -> tuple[Migration, ...]:
     """The packaged migrations, in version order."""
-    found = []
-    for entry in resources.files("llm_grop.ratings").joinpath("migrations").iterdir():
-        match = _NAME.match(entry.name)
-        if match:
-            found.append(Migration(int(match.group(1)), entry.name, entry.read_text("utf-8")))
-    found.sort(key=lambda m: m.version)
-    assert [m.version for m in found] == list(range(1, len(found) + 1)), "migration gap"
-    return tuple(found)
+    return database.migrations(STUDY.package)
 
 
 def schema_version() -> int:
@@ -55,74 +30,6 @@ def schema_version() -> int:
 
 def connect(path: str | Path, *, create: bool = False,
             upto: int | None = None) -> sqlite3.Connection:
-    """An open connection to the study database at ``path``, migrated to the newest schema
-    (or to version ``upto``, for tests of migrations).
-
-    The connection is in autocommit mode (transactions are explicit), with foreign keys
-    on and a busy timeout, and rows as :class:`sqlite3.Row`. Raises :class:`BadInput`
-    if ``path`` does not exist (unless ``create``), is not an llm-grop study database, or
-    was written by a newer llm-grop.
-    """
-    path = Path(path)
-    if not create and not path.is_file():
-        raise BadInput(f"--db {path}: no such study database; make one with "
-                       "'llm-grop ratings create'")
-    try:
-        # A web request may open it in one worker thread and use it in another, one at a
-        # time; it is never shared by two at once.
-        conn = sqlite3.connect(path, isolation_level=None, timeout=BUSY_TIMEOUT_MS / 1000,
-                               check_same_thread=False)
-    except sqlite3.Error as exc:
-        raise BadInput(f"--db {path}: cannot open ({exc})") from None
-    conn.row_factory = sqlite3.Row
-    try:
-        _prepare(conn, path, upto)
-    except BaseException:
-        conn.close()
-        raise
-    return conn
-
-
-def _prepare(conn: sqlite3.Connection, path: Path, upto: int | None) -> None:
-    try:
-        conn.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
-        app_id = conn.execute("PRAGMA application_id").fetchone()[0]
-        version = conn.execute("PRAGMA user_version").fetchone()[0]
-        tables = conn.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
-    except sqlite3.DatabaseError:
-        raise BadInput(f"--db {path}: not an llm-grop study database") from None
-    if app_id != APPLICATION_ID and (tables or version):
-        raise BadInput(f"--db {path}: not an llm-grop study database")
-    steps = migrations()
-    if version > len(steps):
-        raise BadInput(f"--db {path}: written by a newer llm-grop (schema {version}, this "
-                       f"one knows {len(steps)}); upgrade llm-grop")
-    conn.execute("PRAGMA journal_mode = WAL")
-    # Every commit reaches the disk before it is acknowledged: a rating once confirmed
-    # survives a power cut.
-    conn.execute("PRAGMA synchronous = FULL")
-    conn.execute("PRAGMA foreign_keys = ON")
-    for step in steps[version:upto]:
-        try:
-            conn.executescript(f"BEGIN IMMEDIATE;\n{step.sql}\n"
-                               f"PRAGMA application_id = {APPLICATION_ID};\n"
-                               f"PRAGMA user_version = {step.version};\nCOMMIT;")
-        except sqlite3.Error as exc:
-            if conn.in_transaction:
-                conn.execute("ROLLBACK")
-            # Another process may have applied it meanwhile.
-            if conn.execute("PRAGMA user_version").fetchone()[0] >= step.version:
-                continue
-            raise BadInput(f"--db {path}: migration {step.name} failed ({exc})") from None
-
-
-@contextlib.contextmanager
-def transaction(conn: sqlite3.Connection) -> Iterator[sqlite3.Connection]:
-    """``BEGIN IMMEDIATE`` ... ``COMMIT`` on ``conn``, rolled back if the block raises."""
-    conn.execute("BEGIN IMMEDIATE")
-    try:
-        yield conn
-    except BaseException:
-        conn.execute("ROLLBACK")
-        raise
-    conn.execute("COMMIT")
+    """An open connection to the study database at ``path`` (see
+    :func:`llm_grop.database.connect`)."""
+    return database.connect(STUDY, path, create=create, upto=upto)

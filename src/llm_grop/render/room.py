@@ -36,9 +36,9 @@ from llm_grop.render.table import (
     kind_colors,
     save_png,
 )
-from llm_grop.world.arrangement import Placement
+from llm_grop.world.arrangement import Arrangement, Placement
 from llm_grop.world.geometry2d import Box, Pose2D
-from llm_grop.world.plan import ExecutedStep, RunResult
+from llm_grop.world.plan import ExecutedStep, Plan, RunResult
 from llm_grop.world.scene import Scene, SceneTable
 
 #: Picture size in inches (1950 x 1200 pixels at the table picture's DPI).
@@ -80,6 +80,41 @@ def draw_run(result: RunResult, path: str | Path, *, title: str | None = None) -
         raise BadInput(f"image {path}: only PNG pictures are made; use a name ending in .png")
     with matplotlib.rc_context(STYLE):
         save_png(_figure(result, title), path)
+
+
+def draw_plan(scene: Scene, plan: Plan, arrangement: Arrangement, path: str | Path, *,
+              title: str | None = None) -> None:
+    """Write a top-down PNG picture of ``plan``, not yet executed, to ``path``: the room,
+    the planned paths and standing positions, and the arrangement it realises (drawn as
+    :func:`draw_run` draws a run, every leg as planned). ``title`` defaults to the request."""
+    steps = tuple(ExecutedStep(s.action, True, s.duration_s, s.object, s.goal, s.path,
+                               s.standing, s.pose) for s in plan.steps)
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=FIGSIZE_IN, dpi=DPI, facecolor=BACKGROUND)
+        FigureCanvasAgg(fig)
+        ax = fig.add_axes(_MAP_RECT)
+        handles: list[Patch | Line2D] = []
+        _draw_room(ax, scene, handles)
+        _draw_sources(ax, scene, arrangement.placements, handles)
+        _draw_paths(ax, steps, handles)
+        _draw_standing(ax, steps, scene.robot.base_radius_m, handles)
+        _draw_start(ax, scene.robot_start, scene.robot.base_radius_m, handles)
+        _set_limits(ax, scene, steps)
+        inset = fig.add_axes(_TABLE_RECT)
+        draw_table_on(inset, arrangement, show_relations=False, compact=True)
+        inset.set_title("planned table setting", fontsize=8.5, color="#333333")
+        fig.legend(handles=handles, loc="upper left", bbox_to_anchor=_LEGEND_AT, ncol=2,
+                   fontsize=8, frameon=False, handlelength=2.2, columnspacing=1.2)
+        head = fig.text(0.5, 0.985, _clip(title or arrangement.request or "plan",
+                                          _TITLE_WIDTH_CHARS, 2),
+                        ha="center", va="top", fontsize=12, fontweight="bold")
+        facts = (f"planned: {len(plan.order)} objects  |  expected utility "
+                 f"{plan.utility:.1f} s  |  expected duration "
+                 f"{plan.expected_duration_s or plan.cost_s:.1f} s  |  scene {scene.name}")
+        ax.annotate(facts, xy=(0.5, 0.0), xycoords=head, xytext=(0, -6),
+                    textcoords="offset points", ha="center", va="top", fontsize=9,
+                    annotation_clip=False, color="#333333")
+        save_png(fig, Path(path))
 
 
 def room_image(scene: Scene, robot: Pose2D, objects: dict[str, tuple[float, float]],

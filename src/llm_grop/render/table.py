@@ -34,6 +34,9 @@ from llm_grop.world.seat import Seat
 
 #: Picture size in inches and resolution in dots per inch (1200 x 1050 pixels).
 FIGSIZE_IN = (8.0, 7.0)
+#: A picture for a phone's screen, inches: shown about 360 pixels wide, its labels stay
+#: near 10 pixels high.
+PHONE_SIZE_IN = (3.6, 3.9)
 DPI = 150
 #: Colours of the page, the table top and its edge.
 BACKGROUND = "#ffffff"
@@ -84,19 +87,23 @@ def kind_colors(placements: Sequence[Placement]) -> dict[str, str]:
 
 
 def draw_arrangement(arrangement: Arrangement, path: str | Path, *, title: str | None = None,
-                     show_relations: bool = False) -> None:
+                     show_relations: bool = False,
+                     size_in: tuple[float, float] = FIGSIZE_IN) -> None:
     """Write a top-down PNG picture of ``arrangement`` to ``path``.
 
     ``title`` defaults to the arrangement's request; the requested objects are
     listed under it. ``show_relations`` adds an arrow from each relation's subject
-    to its reference, labelled with the relation. The file is replaced atomically.
-    Raises :class:`BadInput` if ``path`` does not end in ``.png`` or cannot be written.
+    to its reference, labelled with the relation. ``size_in`` is the picture's size in
+    inches at :data:`DPI`; the lettering keeps its size, so a smaller picture
+    (:data:`PHONE_SIZE_IN`) has larger labels relative to it, for a phone's screen. The
+    file is replaced atomically. Raises :class:`BadInput` if ``path`` does not end in
+    ``.png`` or cannot be written.
     """
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise BadInput(f"image {path}: only PNG pictures are made; use a name ending in .png")
     with matplotlib.rc_context(STYLE):
-        save_png(_figure(arrangement, title, show_relations), path)
+        save_png(_figure(arrangement, title, show_relations, size_in), path)
 
 
 def save_png(fig: Figure, path: Path, *, dpi: int = DPI) -> None:
@@ -115,12 +122,18 @@ def save_png(fig: Figure, path: Path, *, dpi: int = DPI) -> None:
         raise BadInput(f"image {path}: cannot write ({exc.strerror or exc})") from None
 
 
-def _figure(arrangement: Arrangement, title: str | None, show_relations: bool) -> Figure:
-    fig = Figure(figsize=FIGSIZE_IN, dpi=DPI, facecolor=BACKGROUND)
+def _figure(arrangement: Arrangement, title: str | None, show_relations: bool,
+            size_in: tuple[float, float] = FIGSIZE_IN) -> Figure:
+    fig = Figure(figsize=size_in, dpi=DPI, facecolor=BACKGROUND)
     FigureCanvasAgg(fig)
-    ax = fig.add_axes(_AXES_RECT)
+    # The margins for tick labels and the title stay as many inches in a smaller picture.
+    w, h = size_in
+    left, bottom, width, height = _AXES_RECT
+    fw, fh = FIGSIZE_IN
+    ax = fig.add_axes((left * fw / w, bottom * fh / h, 1 - (1 - width) * fw / w,
+                       1 - (1 - height) * fh / h))
     draw_table_on(ax, arrangement, show_relations=show_relations)
-    _draw_title(fig, arrangement, title)
+    _draw_title(fig, arrangement, title, round(_TITLE_WIDTH_CHARS * w / fw))
     return fig
 
 
@@ -348,16 +361,17 @@ def _clip_lines(text: str, width: int, max_lines: int) -> str:
     return "\n".join(lines)
 
 
-def _draw_title(fig: Figure, arrangement: Arrangement, title: str | None) -> None:
+def _draw_title(fig: Figure, arrangement: Arrangement, title: str | None,
+                width_chars: int = _TITLE_WIDTH_CHARS) -> None:
     heading = title if title is not None else (arrangement.request or "arrangement")
-    head = fig.text(0.5, 0.975, _clip_lines(heading, _TITLE_WIDTH_CHARS, 2), ha="center",
+    head = fig.text(0.5, 0.975, _clip_lines(heading, width_chars, 2), ha="center",
                     va="top", fontsize=11, fontweight="bold")
     names = [p.name for p in arrangement.placements]
     table = arrangement.table
     top = (f"round table \u00f8 {table.width * 100:g} cm" if table.is_round
            else f"table {table.width * 100:g} \u00d7 {table.depth * 100:g} cm")
     listed = f"objects ({len(names)}): {', '.join(names) or 'none'}  |  {top}"
-    fig.axes[0].annotate(_clip_lines(listed, _TITLE_WIDTH_CHARS + 15, 2), xy=(0.5, 0.0),
+    fig.axes[0].annotate(_clip_lines(listed, width_chars + 15, 2), xy=(0.5, 0.0),
                          xycoords=head, xytext=(0, -5), textcoords="offset points",
                          ha="center", va="top", fontsize=8.5, color="#333333",
                          annotation_clip=False)

@@ -1,0 +1,102 @@
+"""``llm-grop serve``: the planning service for robot stacks, and its playground page."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import click
+
+from llm_grop.cli.logs import VERBOSE
+from llm_grop.cli.options import EPILOG, check_out_dir
+from llm_grop.errors import BadInput
+
+
+def _default_db() -> Path:
+    base = os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share"
+    return Path(base) / "llm-grop" / "serve.sqlite"
+
+
+@click.command(epilog=EPILOG)
+@VERBOSE
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Address to bind; any but loopback needs --token.")
+@click.option("--port", default=8000, show_default=True, type=click.IntRange(0, 65535),
+              help="Port to bind (0: any free one).")
+@click.option("--llm", "backends", multiple=True, default=("embedded",), show_default=True,
+              help="An LLM backend clients may choose by name (repeatable; the first is the "
+                   "default): embedded, openai, replay, or a plugin's.")
+@click.option("--model", help="Model name (openai) or GGUF path (embedded).")
+@click.option("--base-url", help="OpenAI-compatible endpoint (default: $OPENAI_BASE_URL).")
+@click.option("--replay", "replay_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="JSONL of recorded calls, for --llm replay.")
+@click.option("--timeout", "timeout_s", default=60.0, show_default=True, type=float,
+              help="Seconds per LLM request.")
+@click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
+              help="Retries on transient LLM errors (connection, 429, 5xx).")
+@click.option("--workers", default=2, show_default=True, type=click.IntRange(1, 64),
+              help="Worker processes that run jobs.")
+@click.option("--llm-threads", type=click.IntRange(1),
+              help="The embedded model's CPU threads per worker [default: cores over "
+                   "--workers].")
+@click.option("--db", "db", type=click.Path(dir_okay=False, path_type=Path),
+              help="SQLite file of jobs and results [default: "
+                   "$XDG_DATA_HOME/llm-grop/serve.sqlite].")
+@click.option("--token", envvar="LLM_GROP_TOKEN",
+              help="Bearer token every request must carry (at least 16 characters; "
+                   "default $LLM_GROP_TOKEN); needed to bind other than loopback.")
+@click.option("--max-run-time", "run_time_s", default=600.0, show_default=True,
+              type=click.FloatRange(1), help="Seconds a job may run before it is failed.")
+@click.option("--queue", default=64, show_default=True, type=click.IntRange(1),
+              help="Jobs that may wait at once; more are answered 429.")
+@click.option("--runs-per-client", default=4, show_default=True, type=click.IntRange(1),
+              help="Runs one client address may have waiting or running; more get 429.")
+@click.option("--openapi", is_flag=True,
+              help="Print the OpenAPI document (docs/schema/openapi.json) and exit.")
+def serve(host: str, port: int, backends: tuple[str, ...], model: str | None,
+          base_url: str | None, replay_path: Path | None, timeout_s: float, retries: int,
+          workers: int, llm_threads: int | None, db: Path | None, token: str | None,
+          run_time_s: float, queue: int, runs_per_client: int, openapi: bool) -> None:
+    """Serve the JSON API (/v1/) and the playground page (/) over HTTP.
+
+    Needs `pip install 'llm-grop[serve]'`. The LLM backends and their keys stay on the
+    server; clients choose among --llm by name (GET /v1/info lists them).
+    """
+    try:
+        import uvicorn
+
+        from llm_grop.service.app import create_app
+    except ImportError as exc:
+        raise BadInput(f"serve: needs the serve extra (pip install 'llm-grop[serve]'): "
+                       f"{exc.name} is missing") from None
+    from llm_grop.llm.base import BackendOptions
+    from llm_grop.llm.registry import BACKENDS
+    from llm_grop.service.config import Backend, Limits, ServiceConfig, check_bind
+
+    check_bind(host, token)
+    names = [BACKENDS.key(b) for b in dict.fromkeys(backends)]
+    if "replay" in names and replay_path is None:
+        raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
+    if replay_path is not None and not replay_path.is_file():
+        raise BadInput(f"--replay {replay_path}: no such file")
+    options = BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
+                             max_retries=retries,
+                             replay_path=replay_path.absolute() if replay_path else None)
+    db = (db or _default_db()).expanduser().absolute()
+    check_out_dir("db", db.parent)
+    config = ServiceConfig(db=db, backends=tuple(Backend(n, options) for n in names),
+                           workers=workers, token=token,
+                           limits=Limits(run_time_s=run_time_s, queue=queue,
+                                         jobs_per_client=runs_per_client),
+                           llm_threads=llm_threads or max(1, (os.cpu_count() or 1) // workers))
+    if openapi:
+        click.echo(json.dumps(create_app(config, workers=False).openapi(), indent=2))
+        return
+    app = create_app(config)
+    click.echo(f"llm-grop serve: http://{host}:{port}/ (jobs in {db}; backends "
+               f"{', '.join(names)}; {workers} workers)", err=True)
+    # No proxy headers: a client on this machine could otherwise claim any address and
+    # escape its per-client limits.
+    uvicorn.run(app, host=host, port=port, log_level="warning", timeout_graceful_shutdown=5,
+                proxy_headers=False)

@@ -1,0 +1,180 @@
+"""The service's HTTP guard rails: refusals as one-line JSON, the bearer token, the body
+limit on the bytes actually read, security headers, and the lock that keeps one server
+per database."""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import secrets
+from pathlib import Path
+from urllib.parse import parse_qs
+
+from fastapi.responses import JSONResponse, RedirectResponse
+from starlette.datastructures import MutableHeaders
+from starlette.requests import cookie_parser
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from llm_grop.errors import BadInput
+
+#: The cookie a browser keeps the server's token in, after opening ``/?token=...`` once.
+TOKEN_COOKIE = "llm_grop_token"
+CODES = {400: "bad_host", 401: "unauthorized", 403: "forbidden", 404: "not_found",
+         405: "method_not_allowed", 409: "infeasible", 413: "too_large",
+         415: "not_json", 416: "bad_range", 422: "bad_input", 429: "overloaded",
+         500: "internal", 503: "llm_unavailable", 504: "timeout"}
+#: The names a browser gives a server bound to loopback.
+LOOPBACK_HOSTS = frozenset({"127.0.0.1", "localhost", "[::1]", "::1"})
+SECURITY_HEADERS = {
+    "Content-Security-Policy": "default-src 'self'; img-src 'self'; media-src 'self'; "
+                               "script-src 'self'; style-src 'self'; frame-ancestors 'none'; "
+                               "form-action 'self'",
+    "X-Content-Type-Options": "nosniff",
+    # same-origin, not no-referrer: under no-referrer a browser posts forms with "Origin:
+    # null", and the playground could not tell its own forms from another site's.
+    "Referrer-Policy": "same-origin",
+    "X-Frame-Options": "DENY",
+}
+
+
+class Refused(Exception):
+    """A refusal: its HTTP status, one line, and headers (``Retry-After``)."""
+
+    def __init__(self, status: int, message: str, headers: dict[str, str] | None = None):
+        super().__init__(message)
+        self.status, self.message, self.headers = status, message, headers or {}
+
+
+def error_response(status: int, message: str,
+                   headers: dict[str, str] | None = None) -> JSONResponse:
+    """``{"error": message, "code": ...}`` with ``status``."""
+    return JSONResponse({"error": message, "code": CODES.get(status, "bad_input")},
+                        status_code=status, headers=headers)
+
+
+class Guard:
+    """ASGI middleware in front of everything: the bearer token (or, for a browser, the
+    token cookie on reads and on the playground's forms), the body limit on the bytes
+    actually read (chunked or not), and security headers on every answer."""
+
+    def __init__(self, app: ASGIApp, *, token: str | None, max_body: int) -> None:
+        self.app, self.token, self.max_body = app, token, max_body
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+
+        async def with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                headers = MutableHeaders(scope=message)
+                for key, value in SECURITY_HEADERS.items():
+                    headers.setdefault(key, value)
+            await send(message)
+
+        headers = dict(scope["headers"])
+        if self.token is None and _host(headers) not in LOOPBACK_HOSTS:
+            # Without a token only this machine may call: a page elsewhere that renamed
+            # itself to 127.0.0.1 (DNS rebinding) still sends its own name as Host.
+            await error_response(400, "host: this server answers only to 127.0.0.1, "
+                                      "localhost or [::1]; serve other hosts with --token"
+                                 )(scope, receive, with_headers)
+            return
+        if self.token is not None and not self._allowed(scope, headers):
+            answer = self._login(scope) or error_response(
+                401, "missing or wrong token: send 'Authorization: Bearer <token>'",
+                {"WWW-Authenticate": "Bearer"})
+            await answer(scope, receive, with_headers)
+            return
+        if scope["method"] == "POST" and scope["path"].startswith("/v1/") and not \
+                headers.get(b"content-type", b"").startswith(b"application/json"):
+            await error_response(415, "content-type: send the body as application/json"
+                                 )(scope, receive, with_headers)
+            return
+        length = headers.get(b"content-length")
+        too_big = error_response(413, f"request body larger than this server's "
+                                      f"{self.max_body} bytes")
+        if length is not None and (not length.isdigit() or int(length) > self.max_body):
+            await too_big(scope, receive, with_headers)
+            return
+        # The whole body is read here, up to the limit, so a chunked body that never ends
+        # costs no more memory than a declared one.
+        chunks, size, more = [], 0, True
+        while more:
+            message = await receive()
+            if message["type"] == "http.disconnect":
+                return
+            chunk = message.get("body", b"")
+            size += len(chunk)
+            if size > self.max_body:
+                await too_big(scope, receive, with_headers)
+                return
+            chunks.append(chunk)
+            more = message.get("more_body", False)
+        body = b"".join(chunks)
+        sent = False
+
+        async def replay() -> Message:
+            nonlocal sent
+            if not sent:
+                sent = True
+                return {"type": "http.request", "body": body, "more_body": False}
+            return await receive()
+
+        await self.app(scope, replay, with_headers)
+
+    def _allowed(self, scope: Scope, headers: dict[bytes, bytes]) -> bool:
+        assert self.token is not None
+        scheme, _, value = headers.get(b"authorization", b"").decode("latin-1").partition(" ")
+        if scheme.lower() == "bearer" and _same(value.strip(), self.token):
+            return True
+        # A browser has no header to send: the cookie counts for reads, and for the
+        # playground's forms (which check the Origin themselves), never for the JSON API.
+        page = scope["method"] in ("GET", "HEAD") or not scope["path"].startswith("/v1/")
+        return page and _same(_cookie(headers, TOKEN_COOKIE), self.token)
+
+    def _login(self, scope: Scope) -> RedirectResponse | None:
+        """``GET /?token=...`` with the right token: the cookie set, back to the page."""
+        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        given = (query.get("token") or [""])[0]
+        if scope["path"] != "/" or not _same(given, self.token or ""):
+            return None
+        answer = RedirectResponse("/", status_code=303)
+        # Lax, so that a permalink opened from mail or chat arrives with it; the forms
+        # check their Origin, and the JSON API never takes the cookie.
+        answer.set_cookie(TOKEN_COOKIE, given, httponly=True, samesite="lax", path="/",
+                          secure=scope.get("scheme") == "https")
+        return answer
+
+
+def _same(given: str, token: str) -> bool:
+    return bool(given) and secrets.compare_digest(given.encode(), token.encode())
+
+
+def _cookie(headers: dict[bytes, bytes], name: str) -> str:
+    return cookie_parser(headers.get(b"cookie", b"").decode("latin-1")).get(name, "")
+
+
+def _host(headers: dict[bytes, bytes]) -> str:
+    """The Host header's name, without its port."""
+    host = headers.get(b"host", b"").decode("latin-1").lower()
+    if host.startswith("["):
+        return host.partition("]")[0] + "]"
+    return host.rpartition(":")[0] if host.count(":") == 1 else host
+
+
+def hold_lock(db: Path) -> int:
+    """Take the database's lock file, so that one server at a time owns its jobs; the file
+    descriptor that holds it. :class:`BadInput` naming the holder if another server has
+    it (the lock goes with its process, so a killed server's lock is free)."""
+    lock = db.with_name(db.name + ".lock")
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
+        os.close(fd)
+        raise BadInput(f"--db {db}: in use by another llm-grop serve (pid {holder})") from None
+    os.ftruncate(fd, 0)
+    os.write(fd, str(os.getpid()).encode())
+    return fd

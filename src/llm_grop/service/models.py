@@ -1,0 +1,231 @@
+"""The service's JSON API as typed models: what a client sends (strict: unknown keys,
+wrong types and file paths are refused) and what it gets back. FastAPI publishes them as
+the OpenAPI document (``docs/schema/openapi.json``)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Annotated, Any, Literal
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StrictBool, StrictInt
+
+from llm_grop.world.contract import ArrangementDoc, RelationDoc, RunDoc
+from llm_grop.world.plan_doc import PlanJSON
+from llm_grop.world.request import MAX_DINERS, MAX_REQUEST_CHARS
+from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
+
+#: The largest seed: a 32-bit generator seed, as the CLI takes.
+MAX_SEED = 2**31 - 1
+
+
+def _no_path(text: str) -> str:
+    # A name a client sends picks among what the server has; it is never a file to open.
+    if "/" in text or "\\" in text or text.startswith(("~", ".")):
+        raise ValueError(f"{text!r} looks like a file path; the server never reads files a "
+                         "client names, give a name it offers")
+    return text
+
+
+Name = Annotated[str, Field(strict=True, min_length=1, max_length=64),
+                 AfterValidator(_no_path)]
+Sentence = Annotated[str, Field(strict=True, min_length=1, max_length=300)]
+#: A request's text: the server's own limit (``Limits.request_chars``) is checked after.
+RequestText = Annotated[str, Field(strict=True, min_length=1, max_length=MAX_REQUEST_CHARS)]
+Side = Annotated[float, Field(strict=False, ge=MIN_TABLE_SIDE_M, le=MAX_TABLE_SIDE_M,
+                              allow_inf_nan=False)]
+Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-100, le=100)]
+
+
+class _Body(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class TableBody(_Body):
+    """The target table's top: a rectangle ``[width, depth]`` or a circle ``[d, d]``,
+    metres."""
+
+    shape: Literal["rectangle", "circle"] = "rectangle"
+    size: tuple[Side, Side]
+
+    def table(self) -> Table:
+        """As the pipeline's table."""
+        if self.shape == "circle":
+            return Table.circle(self.size[0])
+        return Table(self.size[0], self.size[1])
+
+
+class ArrangeBody(_Body):
+    """``POST /v1/arrangements``: arrange the objects of a request on a table."""
+
+    request: RequestText = Field(description="the request in the user's words")
+    table: TableBody | None = Field(None, description="default: 0.9 x 0.6 m")
+    diners: Annotated[StrictInt, Field(ge=1, le=MAX_DINERS)] | None = Field(
+        None, description="seat this many diners, one setting each (default: as the request "
+                          "says)")
+    preferences: list[Sentence] = Field([], max_length=20, description="relations the user "
+                                        "wants, e.g. 'the dinner fork to the left of the "
+                                        "dinner plate'; they win over the LLM")
+    llm: Name | None = Field(None, description="one of the server's backends (GET /v1/info); "
+                                               "default: its first")
+    seed: Annotated[StrictInt, Field(ge=0, le=MAX_SEED)] = 0
+    m: Annotated[StrictInt, Field(ge=1, le=100)] = Field(25, description="configurations to "
+                                                                        "sample (M)")
+    guess: StrictBool = Field(True, description="false: refuse a request the LLM would have "
+                                                "to complete")
+
+
+class ChairBody(_Body):
+    """A sensed chair: its footprint's centre and size, metres, and yaw, radians (room
+    frame)."""
+
+    center: tuple[Coordinate, Coordinate]
+    size: tuple[Annotated[float, Field(gt=0, le=3)], Annotated[float, Field(gt=0, le=3)]]
+    yaw: Annotated[float, Field(allow_inf_nan=False)] = 0.0
+
+
+class PlanBody(_Body):
+    """``POST /v1/plans``: a task-motion plan for a request (or a given arrangement) in a
+    room."""
+
+    request: RequestText | None = None
+    task: Annotated[StrictInt, Field(ge=1, le=100)] | None = Field(
+        None, description="the paper's Table I task instead of a request")
+    arrangement: dict[str, Any] | None = Field(
+        None, description="an arrangement JSON to plan for as it is, instead of a request")
+    table: TableBody | None = Field(None, description="replaces the scene's target top")
+    preferences: list[Sentence] = Field([], max_length=20)
+    scene: dict[str, Any] | None = Field(
+        None, description="the room as a scene document (the run JSON's scene; default: the "
+                          "packaged dining room)")
+    chairs: list[ChairBody] | None = Field(
+        None, max_length=40, description="the chairs the robot senses; they replace the "
+                                         "scene's (default: the scene's own, else one is "
+                                         "sampled for the seed)")
+    robot: tuple[Coordinate, Coordinate, Annotated[float, Field(allow_inf_nan=False)]] | None \
+        = Field(None, description="the robot's pose [x, y, theta] in the room frame")
+    method: Name = "llm-grop"
+    feasibility: Name = Field("default", description="the planner's feasibility profile")
+    llm: Name | None = None
+    seed: Annotated[StrictInt, Field(ge=0, le=MAX_SEED)] = 0
+    m: Annotated[StrictInt, Field(ge=1, le=100)] = 25
+    guess: StrictBool = True
+
+
+class RunBody(PlanBody):
+    """``POST /v1/runs``: plan and execute in a simulator, as a job."""
+
+    simulator: Name = Field("kinematic2d", description="kinematic2d or mujoco")
+    video: StrictBool = Field(True, description="mujoco: record a video of the episode")
+
+
+class ErrorAnswer(BaseModel):
+    """Every refusal: the project's one-line message and a code for programs."""
+
+    error: str
+    code: Literal["bad_input", "infeasible", "unauthorized", "forbidden", "not_found",
+                  "too_large", "overloaded", "internal", "timeout", "method_not_allowed",
+                  "bad_host", "not_json", "bad_range", "llm_unavailable"]
+
+
+class ReadObject(BaseModel):
+    """One object as the request was read: its name, kind, where it came from and the
+    request's words it was read from."""
+
+    name: str
+    kind: str
+    source: str | None = None
+    words: str | None = None
+
+
+class Reading(BaseModel):
+    """How the request was read: by the catalog matcher or an LLM, the objects and the
+    relations with their sources."""
+
+    read_by: str | None
+    objects: list[ReadObject]
+    relations: list[RelationDoc]
+
+
+class ArrangementAnswer(BaseModel):
+    """``POST /v1/arrangements``' answer."""
+
+    id: str
+    arrangement: ArrangementDoc
+    reading: Reading
+    warnings: list[str]
+    picture: str = Field(description="URL of the arrangement's PNG picture")
+    permalink: str
+
+
+class PlanAnswer(BaseModel):
+    """``POST /v1/plans``' answer: the plan a robot stack executes."""
+
+    id: str
+    plan: PlanJSON
+    reading: Reading
+    warnings: list[str]
+    picture: str = Field(description="URL of the planned arrangement's PNG picture")
+    room_picture: str = Field(description="URL of the plan drawn on the room, PNG")
+    permalink: str
+
+
+class JobAnswer(BaseModel):
+    """A job: ``POST /v1/runs``' answer and ``GET /v1/runs/{id}``. Times are seconds since
+    the epoch."""
+
+    id: str
+    kind: str
+    state: Literal["queued", "running", "done", "failed", "cancelled"]
+    created: float
+    started: float | None = None
+    finished: float | None = None
+    attempts: int
+    error: str | None = None
+    status: int | None = Field(None, description="a failure's HTTP status: 422 bad input, "
+                                                 "409 nothing feasible, 504 over time")
+    result: RunDoc | dict[str, Any] | None = None
+    files: dict[str, str] = Field({}, description="file name -> URL: pictures, 3D renders, "
+                                                  "the video")
+    events: str = Field(description="URL of the progress events (text/event-stream)")
+    permalink: str
+
+
+class Pending(BaseModel):
+    """An arrangement or plan not ready within the server's wait (202): its id, state and
+    the permalink its answer will be at."""
+
+    id: str
+    state: str
+    permalink: str
+
+
+class Info(BaseModel):
+    """``GET /v1/info``: what this server offers."""
+
+    version: str
+    backends: list[str]
+    methods: list[str]
+    simulators: list[str]
+    limits: dict[str, float]
+    queue: dict[str, int]
+
+
+def reading(doc: ArrangementDoc) -> Reading:
+    """The reading held in an arrangement document."""
+    return Reading(read_by=doc.request_read_by,
+                   objects=[ReadObject(name=o.name, kind=o.kind or o.name, source=o.source,
+                                       words=o.words) for o in doc.objects],
+                   relations=list(doc.relations))
+
+
+def one_line(errors: Sequence[Any]) -> str:
+    """The first of pydantic's validation ``errors`` as ``field: message``, in words a
+    client can act on."""
+    if not errors:
+        return "request body: invalid"
+    first = errors[0]
+    where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "request body"
+    message = str(first.get("msg", "invalid")).removeprefix("Value error, ")
+    if first.get("type") == "extra_forbidden":
+        message = "unknown field"
+    return f"{where}: {message}"

@@ -1,0 +1,202 @@
+"""What a worker does for each kind of job: the public API called as the CLI calls it,
+with the server's own LLM backends, and the answer as JSON and files (pictures, renders,
+the video)."""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from llm_grop.errors import BadInput
+from llm_grop.llm.base import LLM, CallLog
+from llm_grop.llm.registry import create_llm
+from llm_grop.service.config import ServiceConfig
+from llm_grop.service.models import ArrangeBody, PlanBody, RunBody
+from llm_grop.world.table import Table
+
+Files = dict[str, tuple[str, bytes]]
+#: Most walls, tables, sources or chairs an inline scene may list.
+MAX_SCENE_ITEMS = 100
+PNG = "image/png"
+
+
+class Backends:
+    """A worker's LLM backends, each built once, on first use, and kept for its jobs."""
+
+    def __init__(self, config: ServiceConfig) -> None:
+        self.config = config
+        self._made: dict[str, LLM] = {}
+
+    def log(self, name: str | None) -> CallLog:
+        """A fresh call log over the backend called ``name`` (``None``: the default)."""
+        backend = self.config.backend(name)
+        if backend.name not in self._made:
+            options = backend.options
+            if self.config.llm_threads is not None:
+                options = replace(options, n_threads=self.config.llm_threads)
+            self._made[backend.name] = create_llm(backend.name, options)
+        return CallLog(self._made[backend.name], None)
+
+    def close(self) -> None:
+        """Release every backend."""
+        for llm in self._made.values():
+            close = getattr(llm, "close", None)
+            if close is not None:
+                close()
+        self._made.clear()
+
+
+def perform(kind: str, body: dict[str, Any], config: ServiceConfig, llms: Backends,
+            on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
+    """Do the job ``kind`` (``arrange``, ``plan`` or ``run``) for the request ``body``:
+    its result JSON and files. Raises the project's errors for bad input (422) and
+    nothing feasible (409)."""
+    if kind == "arrange":
+        return _arrange(ArrangeBody.model_validate(body), config, llms, on_event)
+    if kind == "plan":
+        return _plan(PlanBody.model_validate(body), config, llms, on_event)
+    return _run(RunBody.model_validate(body), config, llms, on_event)
+
+
+def _options(body: ArrangeBody | PlanBody) -> Any:
+    from llm_grop.arrangement.pipeline import ArrangeOptions
+
+    return ArrangeOptions(m=body.m, preferences=tuple(body.preferences))
+
+
+def _table(body: ArrangeBody) -> Table:
+    from llm_grop.geometry.places import default_seats
+
+    table = body.table.table() if body.table is not None else Table()
+    if body.diners is not None and body.diners > 1:
+        table = table.with_diners(default_seats(table, body.diners))
+    return table
+
+
+def _png(draw: Callable[[Path], object], scratch: Path) -> bytes:
+    with tempfile.TemporaryDirectory(prefix="picture-", dir=scratch) as tmp:
+        path = Path(tmp) / "picture.png"
+        draw(path)
+        return path.read_bytes()
+
+
+def _check_size(count: int, config: ServiceConfig) -> None:
+    if count > config.limits.objects:
+        raise BadInput(f"request: {count} objects; this server sets at most "
+                       f"{config.limits.objects}")
+
+
+def _arrange(body: ArrangeBody, config: ServiceConfig, llms: Backends,
+             on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
+    from llm_grop.api import arrange
+    from llm_grop.world.serialize import arrangement_to_dict
+
+    result = arrange(body.request, llm=llms.log(body.llm), table=_table(body),
+                     seed=body.seed, options=_options(body), on_event=on_event,
+                     guess=body.guess)
+    _check_size(len(result.arrangement.placements), config)
+    return ({"arrangement": arrangement_to_dict(result.arrangement)},
+            _table_pictures(result.arrangement, config.scratch))
+
+
+def _table_pictures(arrangement: Any, scratch: Path) -> Files:
+    """The arrangement's picture, and one for a phone's screen."""
+    from llm_grop.render.table import PHONE_SIZE_IN, draw_arrangement
+
+    return {"table.png": (PNG, _png(lambda p: draw_arrangement(arrangement, p), scratch)),
+            "table_phone.png": (PNG, _png(lambda p: draw_arrangement(
+                arrangement, p, size_in=PHONE_SIZE_IN), scratch))}
+
+
+def _scene(body: PlanBody) -> Any:
+    """The room the body describes: its inline scene (or the packaged one) with the sensed
+    chairs and the robot's pose it gives; ``None`` for the packaged room as it is."""
+    from llm_grop.world.scene_file import load_scene, parse_scene, scene_to_dict
+
+    if body.scene is None and body.chairs is None and body.robot is None:
+        return None
+    data = dict(body.scene) if body.scene is not None else scene_to_dict(load_scene())
+    for key in ("walls", "tables", "sources", "chairs", "source_tables"):
+        listed = data.get(key)
+        if isinstance(listed, list) and len(listed) > MAX_SCENE_ITEMS:
+            raise BadInput(f"scene.{key}: {len(listed)} entries; this server takes at most "
+                           f"{MAX_SCENE_ITEMS}")
+    if body.chairs is not None:
+        data["chairs"] = [c.model_dump(mode="json") for c in body.chairs]
+    if body.robot is not None:
+        data["robot"] = {**(data.get("robot") or {}), "start": list(body.robot)}
+    return parse_scene(json.dumps(data), "scene")
+
+
+def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
+             on_event: Callable[[str], None], check: Callable[..., None] | None = None) -> Any:
+    from llm_grop.api import plan
+    from llm_grop.world.serialize import arrangement_from_dict
+
+    if sum(x is not None for x in (body.request, body.task, body.arrangement)) != 1:
+        raise BadInput("request: give one of request, task or arrangement")
+    arrangement = arrangement_from_dict(body.arrangement, "arrangement") \
+        if body.arrangement is not None else None
+    if arrangement is not None:
+        _check_size(len(arrangement.placements), config)
+    planned = plan(body.request, task=body.task, arrangement=arrangement,
+                   method=body.method, scene=_scene(body),
+                   table=body.table.table() if body.table is not None else None,
+                   seed=body.seed, llm=llms.log(body.llm), options=_options(body),
+                   feasibility=body.feasibility, on_event=on_event, guess=body.guess,
+                   check=check)
+    _check_size(len(planned.input.items), config)
+    return planned
+
+
+def _plan(body: PlanBody, config: ServiceConfig, llms: Backends,
+          on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
+    from llm_grop.api import plan_to_dict
+    from llm_grop.render.room import draw_plan
+
+    planned = _planned(body, config, llms, on_event)
+    p = planned.planned
+    arranged = replace(p.arrangement, placements=p.plan.configuration)
+    files = _table_pictures(arranged, config.scratch) | {
+        "room.png": (PNG, _png(lambda f: draw_plan(p.scene, p.plan, arranged, f),
+                               config.scratch))}
+    return {"plan": plan_to_dict(planned)}, files
+
+
+def _run(body: RunBody, config: ServiceConfig, llms: Backends,
+         on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
+    from llm_grop.api import execute
+    from llm_grop.render.room import draw_run
+    from llm_grop.simulation.registry import SIMULATORS, create_simulator
+    from llm_grop.world.run_json import run_to_dict
+
+    three_d = SIMULATORS.key(body.simulator) == "mujoco"
+    with tempfile.TemporaryDirectory(prefix="run-", dir=config.scratch) as tmp:
+        video = Path(tmp) / "episode.mp4"
+        if three_d:
+            from llm_grop.simulation.mujoco.render import check_rendering
+            from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
+
+            check_rendering()
+            sim: Any = MujocoSimulator(MujocoOptions(
+                video_path=str(video) if body.video else None))
+        else:
+            sim = create_simulator(body.simulator)
+        planned = _planned(body, config, llms, on_event, check=getattr(sim, "check", None))
+        result = execute(planned, simulator=sim)
+        files: Files = _table_pictures(result.final, config.scratch) | {
+            "room.png": (PNG, _png(lambda f: draw_run(result, f), config.scratch))}
+        if three_d:
+            from llm_grop.render.raster import save_rgb_png
+
+            for view in ("table", "room"):
+                image = sim.picture(view)
+                files[f"render_{view}.png"] = (PNG, _png(lambda f, i=image: save_rgb_png(i, f),
+                                                         config.scratch))
+            if body.video and video.exists():
+                files["episode.mp4"] = ("video/mp4", video.read_bytes())
+    return {"run": run_to_dict(result)}, files

@@ -1,0 +1,175 @@
+"""The bounded pool of worker processes that run the service's jobs, and its supervisor.
+
+Each worker claims the next queued job from the database, runs it (:mod:`.tasks`) and
+records its result under its claim. The supervisor, a thread in the server, restarts a
+worker that died (its job is queued again, up to a bound), stops one whose job ran over
+its time or was cancelled, and ends that job. A worker dies with the server: the kernel
+kills it when its parent goes (``PR_SET_PDEATHSIG``), and it checks its parent between
+jobs where that is not available.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import logging
+import multiprocessing
+import os
+import signal
+import sys
+import threading
+import time
+from multiprocessing.process import BaseProcess
+
+from llm_grop.errors import Infeasible, LLMError, LLMGropError
+from llm_grop.service.config import ServiceConfig
+from llm_grop.service.jobs import Job, JobStore
+
+log = logging.getLogger(__name__)
+
+#: Seconds an idle worker waits between looks at the queue, at most.
+IDLE_POLL_S = 0.05
+#: Seconds between the supervisor's rounds.
+SUPERVISE_S = 0.25
+_PR_SET_PDEATHSIG = 1
+
+
+def status_of(exc: BaseException) -> tuple[int, str]:
+    """The HTTP status and one-line message a job's failure is answered with: the same
+    wording and meaning as the CLI's exit codes (bad input 422, nothing feasible 409).
+
+    The LLM's failures are the server's (503): their words name the server's model files,
+    endpoints and replay files, which stay in its log; so do an internal error's."""
+    if isinstance(exc, Infeasible):
+        return 409, str(exc)
+    if isinstance(exc, LLMError):
+        return 503, "llm: the server's LLM backend could not answer this request; its log " \
+                    "says why"
+    if isinstance(exc, LLMGropError):
+        return 422, str(exc)
+    return 500, f"internal error: {type(exc).__name__} (the server's log has the details)"
+
+
+def _die_with_parent() -> None:
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL("libc.so.6", use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+
+
+def worker_main(config: ServiceConfig, parent: int) -> None:
+    """A worker's life: claim, run, record, until its parent goes."""
+    from llm_grop.service.tasks import Backends, perform
+
+    _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server stops its workers itself
+    os.environ.setdefault("MUJOCO_GL", "osmesa")
+    store = JobStore(config.db)
+    llms = Backends(config)
+    idle = 0.005
+    try:
+        while os.getppid() == parent:
+            job = store.claim(os.getpid())
+            if job is None:
+                time.sleep(idle)
+                idle = min(idle * 2, IDLE_POLL_S)
+                continue
+            idle = 0.005
+            _run_one(store, job, config, llms, perform)
+    finally:
+        llms.close()
+        store.close()
+
+
+def _run_one(store: JobStore, job: Job, config: ServiceConfig, llms: object,
+             perform: object) -> None:
+    try:
+        result, files = perform(job.kind, job.body, config, llms,  # type: ignore[operator]
+                                lambda message: store.event(job, message))
+    except Exception as exc:  # noqa: BLE001 - every failure ends the job with its reason
+        status, message = status_of(exc)
+        if status >= 500:
+            log.error("job %s failed: %s: %s", job.id, type(exc).__name__, exc,
+                      exc_info=status == 500)
+        store.fail(job, status, message)
+        return
+    store.finish(job, result, files)
+
+
+class WorkerPool:
+    """``config.workers`` worker processes and the supervisor thread that keeps them."""
+
+    def __init__(self, config: ServiceConfig) -> None:
+        self.config = config
+        self._ctx = multiprocessing.get_context("spawn")
+        self._procs: list[BaseProcess] = []
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._store: JobStore | None = None
+
+    def start(self) -> None:
+        """Start the workers and the supervisor."""
+        self._store = JobStore(self.config.db)
+        self._procs = [self._spawn() for _ in range(self.config.workers)]
+        self._thread = threading.Thread(target=self._supervise, name="llm-grop-supervisor",
+                                        daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop the supervisor and every worker (their jobs are recovered at the next
+        start)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+        for p in self._procs:
+            p.kill()
+        for p in self._procs:
+            p.join(timeout=5)
+        if self._store is not None:
+            self._store.close()
+
+    def pids(self) -> list[int]:
+        """The workers' process ids."""
+        return [p.pid for p in self._procs if p.pid is not None]
+
+    def _spawn(self) -> BaseProcess:
+        p = self._ctx.Process(target=worker_main, args=(self.config, os.getpid()),
+                              name="llm-grop-worker", daemon=True)
+        p.start()
+        return p
+
+    def _supervise(self) -> None:
+        while not self._stop.wait(SUPERVISE_S):
+            try:
+                self._round()
+            except Exception:  # noqa: BLE001 - the supervisor must outlive one bad round
+                log.exception("supervisor round failed")
+
+    def _round(self) -> None:
+        store = self._store
+        assert store is not None
+        now = time.time()
+        for p in self._procs:
+            held = [j for j in store.running() if j.worker == p.pid]
+            stop = [j for j in held if j.cancel or (
+                j.started is not None and now - j.started > self.config.limits.run_time_s)]
+            if not stop:
+                continue
+            p.kill()
+            p.join(timeout=5)
+            for job in stop:
+                if job.cancel:
+                    store.end(job, "cancelled", None, "cancelled by the client")
+                else:
+                    store.end(job, "failed", 504, f"ran longer than this server's "
+                                                  f"{self.config.limits.run_time_s:g} s")
+        for k, p in enumerate(self._procs):
+            if not p.is_alive():
+                p.join(timeout=1)
+                self._procs[k] = self._spawn()
+        # Whatever a dead worker held (it was killed for another job, it crashed, or its
+        # job was claimed just before the kill) goes back to the queue.
+        live = {p.pid for p in self._procs if p.is_alive()}
+        for job in store.running():
+            if job.worker not in live:
+                store.orphaned(job, "its worker died")

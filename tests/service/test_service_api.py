@@ -1,0 +1,245 @@
+"""The service's JSON API against a real server: answers validate against the published
+schemas, and every bad input is a 4xx with the project's one-line message."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import httpx
+import jsonschema
+import pytest
+
+from service_support import Server, wait_done
+
+ROOT = Path(__file__).resolve().parents[2]
+SCHEMAS = ROOT / "docs" / "schema"
+REQUEST = "a dinner plate, a dinner fork and a dinner knife"
+
+
+def openapi_validator(name: str) -> jsonschema.Draft202012Validator:
+    """A validator for the OpenAPI document's component ``name``."""
+    doc = json.loads((SCHEMAS / "openapi.json").read_text(encoding="utf-8"))
+    schema = {"$ref": f"#/components/schemas/{name}", "components": doc["components"]}
+    return jsonschema.Draft202012Validator(schema)
+
+
+def contract_validator(name: str) -> jsonschema.Draft202012Validator:
+    return jsonschema.Draft202012Validator(
+        json.loads((SCHEMAS / f"{name}.schema.json").read_text(encoding="utf-8")))
+
+
+def test_the_published_openapi_document_is_the_servers(server: Server) -> None:
+    with server.client() as c:
+        served = c.get("/v1/openapi.json").json()
+    published = json.loads((SCHEMAS / "openapi.json").read_text(encoding="utf-8"))
+    assert served == published, "regenerate: llm-grop serve --openapi > docs/schema/openapi.json"
+    assert all(p.startswith("/v1/") for p in published["paths"])
+
+
+def test_an_arrangement_with_its_reading_picture_and_permalink(server: Server) -> None:
+    with server.client() as c:
+        r = c.post("/v1/arrangements", json={"request": REQUEST, "seed": 0})
+        assert r.status_code == 200, r.text
+        body = r.json()
+        openapi_validator("ArrangementAnswer").validate(body)
+        contract_validator("arrangement").validate(body["arrangement"])
+        names = [o["name"] for o in body["arrangement"]["objects"]]
+        assert names == ["dinner plate", "dinner fork", "dinner knife"]
+        assert {o["source"] for o in body["reading"]["objects"]} == {"request"}
+        assert body["reading"]["read_by"] == "catalog"
+        picture = c.get(body["picture"])
+        assert picture.status_code == 200 and picture.content[:8] == b"\x89PNG\r\n\x1a\n"
+        again = c.get(body["permalink"])
+        assert again.status_code == 200 and again.json() == body
+
+
+def test_the_same_seed_gives_the_same_arrangement(server: Server) -> None:
+    with server.client() as c:
+        first, second = (c.post("/v1/arrangements", json={"request": REQUEST, "seed": 4})
+                         .json() for _ in range(2))
+    assert first["id"] != second["id"]
+    for key in ("objects", "relations", "table"):
+        assert first["arrangement"][key] == second["arrangement"][key]
+
+
+def test_a_plan_a_robot_stack_executes(server: Server) -> None:
+    with server.client() as c:
+        r = c.post("/v1/plans", json={"task": 8, "seed": 3})
+        assert r.status_code == 200, r.text
+        body = r.json()
+        assert c.get(body["room_picture"]).headers["content-type"] == "image/png"
+    openapi_validator("PlanAnswer").validate(body)
+    contract_validator("plan").validate(body["plan"])
+    steps = body["plan"]["steps"]
+    assert [s["action"] for s in steps[:3]] == ["navigate", "pick", "navigate"]
+    assert all(0 <= s["success_p"] <= 1 and s["duration_s"] >= 0 for s in steps)
+    places = [s for s in steps if s["action"] == "place"]
+    assert [s["object"] for s in places] == body["plan"]["plan"]["order"]
+    assert all(len(s["standing"]) == 3 and len(s["pose"]) == 3 for s in places)
+
+
+def test_a_run_as_a_job_with_its_events(server: Server) -> None:
+    with server.client() as c:
+        r = c.post("/v1/runs", json={"task": 1, "seed": 2, "method": "grop"})
+        assert r.status_code == 202 and r.headers["location"] == f"/v1/runs/{r.json()['id']}"
+        openapi_validator("JobAnswer").validate(r.json())
+        job = wait_done(c, r.json()["id"])
+        assert job["state"] == "done", job
+        openapi_validator("JobAnswer").validate(job)
+        contract_validator("run").validate(job["result"])
+        assert set(job["files"]) == {"room.png", "table.png", "table_phone.png"}
+        with c.stream("GET", job["events"]) as events:
+            text = "".join(events.iter_text())
+    assert "event: progress" in text and "executing the plan" in text
+    assert text.rstrip().endswith('data: {"state": "done", "error": null}')
+
+
+BAD = [
+    ("/v1/arrangements", {"request": REQUEST, "colour": "red"}, 422, "colour: unknown field"),
+    ("/v1/arrangements", {"request": 5}, 422, "request: Input should be a valid string"),
+    ("/v1/arrangements", {"request": ""}, 422, "request: String should have at least 1"),
+    ("/v1/arrangements", {"request": "a " * 300}, 422,
+     "request: 600 characters; this server reads at most 500"),
+    ("/v1/arrangements", {"request": "a " * 1001}, 422, "request: String should have at most"),
+    ("/v1/arrangements", {"request": REQUEST, "seed": -1}, 422, "seed: Input should be greater"),
+    ("/v1/arrangements", {"request": REQUEST, "llm": "/etc/passwd"}, 422,
+     "llm: '/etc/passwd' looks like a file path"),
+    ("/v1/arrangements", {"request": REQUEST, "llm": "openai"}, 422,
+     "llm: this server offers no backend 'openai'; choose 'replay'"),
+    ("/v1/arrangements", {"request": REQUEST, "table": {"size": [12, 0.6]}}, 422,
+     "table.size.0: Input should be less than or equal to"),
+    ("/v1/plans", {"task": 8, "scene": "/tmp/room.yaml"}, 422,
+     "scene: Input should be a valid dictionary"),
+    ("/v1/plans", {"task": 8, "catalog": "../catalog.yaml"}, 422, "catalog: unknown field"),
+    ("/v1/plans", {"task": 8, "method": "nope"}, 422, "method: unknown method 'nope'"),
+    ("/v1/plans", {"task": 8, "method": "../x"}, 422, "looks like a file path"),
+    ("/v1/plans", {}, 422, "request: give one of request, task or arrangement"),
+    ("/v1/plans", {"task": 8, "scene": {"room": {"width": 5}}}, 422, "scene: "),
+    ("/v1/plans", {"request": "ten dinner plates", "method": "grop",
+                   "table": {"size": [0.3, 0.3]}}, 409,
+     "cannot fit 'dinner plate 9' on the supply tables"),
+    ("/v1/plans", {"task": 8, "scene": {"room": {"width": 5, "depth": 5}, "target": "t",
+                                        "tables": [{"name": "t", "center": [1, 1],
+                                                    "size": [0.5, 0.5]}] * 101}}, 422,
+     "scene.tables: 101 entries; this server takes at most 100"),
+    ("/v1/runs", {"task": 8, "simulator": "bullet"}, 422, "simulator: unknown simulator"),
+]
+
+
+@pytest.mark.parametrize(("path", "body", "status", "words"), BAD,
+                         ids=[f"{p}-{i}" for i, (p, *_rest) in enumerate(BAD)])
+def test_bad_input_is_a_4xx_with_one_line(server: Server, path: str, body: dict,
+                                          status: int, words: str) -> None:
+    with server.client() as c:
+        r = c.post(path, json=body)
+    assert r.status_code == status, r.text
+    answer = r.json()
+    openapi_validator("ErrorAnswer").validate(answer)
+    assert words in answer["error"] and "\n" not in answer["error"]
+    assert "Traceback" not in r.text
+
+
+def test_malformed_json_and_unknown_paths(server: Server) -> None:
+    with server.client() as c:
+        r = c.post("/v1/arrangements", content=b"{not json", headers={
+            "content-type": "application/json"})
+        assert r.status_code == 422 and r.json()["code"] == "bad_input"
+        r = c.get("/v1/runs/nope")
+        assert r.status_code == 404 and r.json() == {
+            "error": "no run job 'nope' on this server", "code": "not_found"}
+        assert c.get("/v1/files/nope/table.png").status_code == 404
+
+
+def test_oversized_bodies_get_413_declared_or_chunked(server: Server) -> None:
+    big = b'{"request": "' + b"a" * (300 * 1024) + b'"}'
+    with server.client() as c:
+        r = c.post("/v1/arrangements", content=big,
+                   headers={"content-type": "application/json"})
+        assert r.status_code == 413 and "larger than" in r.json()["error"]
+
+        def chunks():
+            for k in range(0, len(big), 4096):
+                yield big[k:k + 4096]
+
+        r = c.post("/v1/arrangements", content=chunks(),
+                   headers={"content-type": "application/json"})
+        assert r.status_code == 413
+
+
+def test_one_client_may_not_queue_without_bound(tmp_path: Path) -> None:
+    from service_support import start_server
+
+    s = start_server(tmp_path / "jobs.sqlite", "--workers", "1", "--queue", "3")
+    try:
+        with s.client() as c:
+            codes = [c.post("/v1/runs", json={"task": 8, "seed": k}) for k in range(8)]
+    finally:
+        s.stop()
+    refused = [r for r in codes if r.status_code == 429]
+    assert refused and all(r.headers["retry-after"].isdigit() for r in refused)
+    assert all(r.status_code in (202, 429) for r in codes)
+
+
+def test_a_token_is_needed_and_checked(tmp_path: Path) -> None:
+    from service_support import start_server
+
+    token = "t/+=" * 6  # characters a cookie must quote
+    s = start_server(tmp_path / "jobs.sqlite", token=token)
+    try:
+        assert httpx.get(f"{s.url}/v1/info").status_code == 401
+        wrong = httpx.get(f"{s.url}/v1/info", headers={"Authorization": "Bearer " + "x" * 24})
+        assert wrong.status_code == 401 and wrong.json()["code"] == "unauthorized"
+        with s.client() as c:
+            assert c.get("/v1/info").status_code == 200
+        # A browser opens /?token=... once; the cookie then opens the pages, not the API.
+        with httpx.Client(base_url=s.url) as browser:
+            login = browser.get("/", params={"token": token})
+            assert login.status_code == 303 and "HttpOnly" in login.headers["set-cookie"]
+            assert browser.get("/").status_code == 200
+            assert browser.post("/v1/arrangements", json={"request": REQUEST}
+                                ).status_code == 401
+    finally:
+        s.stop()
+
+
+def test_a_failing_llm_is_the_servers_fault_and_names_nothing_of_it(server: Server) -> None:
+    with server.client() as c:
+        r = c.post("/v1/arrangements", json={"request": "a dinner plate and a flying saucer"})
+    assert r.status_code == 503, r.text
+    assert r.json() == {"error": "llm: the server's LLM backend could not answer this "
+                                 "request; its log says why", "code": "llm_unavailable"}
+    assert "jsonl" not in r.text  # the server's replay file stays on the server
+
+
+def test_only_json_and_only_this_machines_names(server: Server) -> None:
+    with server.client() as c:
+        r = c.post("/v1/arrangements", content=json.dumps({"request": REQUEST}),
+                   headers={"content-type": "text/plain"})
+        assert r.status_code == 415 and r.json()["code"] == "not_json"
+        r = c.get("/v1/info", headers={"host": "evil.example:8000"})
+        assert r.status_code == 400 and "answers only to 127.0.0.1" in r.json()["error"]
+        assert c.get("/v1/info", headers={"host": "localhost"}).status_code == 200
+
+
+def test_a_form_from_another_site_is_refused(server: Server) -> None:
+    form = {"request": REQUEST, "action": "arrange"}
+    with server.client() as c:
+        for origin in ("http://evil.example", "null", None):
+            headers = {"origin": origin} if origin else {}
+            r = c.post("/play", data=form, headers=headers)
+            assert r.status_code == 403 and "another site" in r.text
+        r = c.post("/play", data=form, headers={"origin": server.url})
+        assert r.status_code == 303 and r.headers["location"].startswith("/a/")
+
+
+def test_a_video_is_served_in_ranges(server: Server) -> None:
+    with server.client() as c:
+        job = c.post("/v1/arrangements", json={"request": REQUEST}).json()
+        whole = c.get(job["picture"]).content
+        part = c.get(job["picture"], headers={"range": "bytes=10-19"})
+        assert part.status_code == 206 and part.content == whole[10:20]
+        assert part.headers["content-range"] == f"bytes 10-19/{len(whole)}"
+        assert c.get(job["picture"], headers={"range": "bytes=-5"}).content == whole[-5:]
+        bad = c.get(job["picture"], headers={"range": f"bytes={len(whole)}-"})
+        assert bad.status_code == 416 and bad.json()["code"] == "bad_range"

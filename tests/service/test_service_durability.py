@@ -1,0 +1,107 @@
+"""Jobs that are never lost: ``kill -9`` of the server during a burst of runs, then a
+restart; every accepted job ends in a terminal state, none lost and none done twice."""
+
+from __future__ import annotations
+
+import sqlite3
+import time
+from pathlib import Path
+
+import pytest
+
+from llm_grop.errors import BadInput
+from llm_grop.service.jobs import MAX_ATTEMPTS, JobStore
+from service_support import start_server, wait_done
+
+
+def test_kill_9_during_a_burst_then_restart(tmp_path: Path) -> None:
+    db = tmp_path / "jobs.sqlite"
+    server = start_server(db, "--workers", "2")
+    accepted = []
+    with server.client() as c:
+        for seed in range(12):
+            r = c.post("/v1/runs", json={"task": 8, "seed": seed})
+            assert r.status_code in (202, 429)
+            if r.status_code == 202:
+                accepted.append(r.json()["id"])
+        time.sleep(0.8)  # some running, some done, some waiting
+    server.kill()
+    before = {r[0]: (r[1], r[2]) for r in sqlite3.connect(db).execute(
+        "SELECT id, state, finished FROM jobs")}
+    assert set(before) == set(accepted)
+    states = [state for state, _ in before.values()]
+    assert "queued" in states or "running" in states
+
+    again = start_server(db, "--workers", "2")
+    try:
+        with again.client() as c:
+            final = [wait_done(c, job_id) for job_id in accepted]
+    finally:
+        again.stop()
+    assert [j["state"] for j in final] == ["done"] * len(accepted)
+    assert len(sqlite3.connect(db).execute("SELECT id FROM jobs").fetchall()) == len(accepted)
+    for j in final:
+        state, finished = before[j["id"]]
+        if state == "done":  # kept its first result: a restart runs nothing twice
+            assert j["attempts"] == 1 and j["finished"] == finished
+        else:  # run once more, and only once
+            assert j["attempts"] == (2 if state == "running" else 1)
+
+
+def test_a_second_server_on_one_database_is_refused(tmp_path: Path) -> None:
+    from llm_grop.service.http import hold_lock
+
+    db = tmp_path / "jobs.sqlite"
+    fd = hold_lock(db)
+    try:
+        with pytest.raises(BadInput, match=r"in use by another llm-grop serve \(pid \d+\)"):
+            hold_lock(db)
+    finally:
+        import os
+
+        os.close(fd)
+    os.close(hold_lock(db))  # free once its holder let go
+
+
+def test_a_stale_worker_cannot_write_a_result(tmp_path: Path) -> None:
+    store = JobStore(tmp_path / "jobs.sqlite")
+    job_id = store.submit("run", {"task": 8}, "me", queue=10)
+    first = store.claim(worker=1)
+    assert first is not None and first.id == job_id
+    assert store.recover() == 1  # the server restarted under it
+    second = store.claim(worker=2)
+    assert second is not None and second.claim != first.claim
+    assert not store.finish(first, {"run": "stale"}, {})
+    assert not store.fail(first, 500, "stale")
+    store.event(first, "stale")
+    assert [m for _, _, m in store.events(job_id)] == [
+        "attempt 2 of 3, after the last one was interrupted"]
+    assert store.finish(second, {"run": "fresh"}, {"a.png": ("image/png", b"x")})
+    done = store.get(job_id)
+    assert done is not None and done.state == "done" and done.result == {"run": "fresh"}
+    assert done.attempts == 2
+
+
+def test_a_job_that_keeps_killing_its_worker_fails_with_a_reason(tmp_path: Path) -> None:
+    store = JobStore(tmp_path / "jobs.sqlite")
+    job_id = store.submit("run", {"task": 8}, "me", queue=10)
+    for _ in range(MAX_ATTEMPTS):
+        job = store.claim(worker=1)
+        assert job is not None
+        store.orphaned(job, "its worker died")
+    job = store.get(job_id)
+    assert job is not None and job.state == "failed"
+    assert job.error == f"its worker died {MAX_ATTEMPTS} times; given up"
+
+
+def test_the_queue_is_bounded(tmp_path: Path) -> None:
+    from llm_grop.service.jobs import Overloaded
+
+    store = JobStore(tmp_path / "jobs.sqlite")
+    for _ in range(3):
+        store.submit("arrange", {}, "me", queue=3)
+    with pytest.raises(Overloaded, match="3 jobs are waiting"):
+        store.submit("arrange", {}, "you", queue=3)
+    store.submit("run", {}, "me", queue=10, per_client=1)
+    with pytest.raises(Overloaded, match="1 of your runs are unfinished"):
+        store.submit("run", {}, "me", queue=10, per_client=1)
