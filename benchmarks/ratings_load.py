@@ -53,6 +53,14 @@ def synthetic_study(db: Path, pictures: int) -> None:
 @contextlib.contextmanager
 def serving(db: Path, token: str = ADMIN_TOKEN, *extra: str) -> Iterator[str]:
     """``llm-grop ratings serve`` on a free loopback port in its own process; its URL."""
+    with server_process(db, token, *extra) as (url, _):
+        yield url
+
+
+@contextlib.contextmanager
+def server_process(db: Path, token: str = ADMIN_TOKEN, *extra: str
+                   ) -> Iterator[tuple[str, subprocess.Popen[str]]]:
+    """:func:`serving`, with the server's process too."""
     exe = Path(sys.executable).with_name("llm-grop")
     proc = subprocess.Popen([str(exe), "ratings", "serve", "--db", str(db), "--port", "0",
                              "--admin-token", token, *extra],
@@ -70,7 +78,7 @@ def serving(db: Path, token: str = ADMIN_TOKEN, *extra: str) -> Iterator[str]:
                 httpx.get(url, timeout=1.0)
                 break
             time.sleep(0.05)
-        yield url
+        yield url, proc
     finally:
         proc.terminate()
         try:

@@ -52,6 +52,10 @@ class ChatServer:
     raw: deque[bytes] = field(default_factory=deque)
     #: Seconds to wait before answering, to provoke client timeouts.
     delay_s: float = 0.0
+    #: Seconds between the bytes of an answer's body (0: all at once): a trickling server.
+    trickle_s: float = 0.0
+    #: The Retry-After header of error answers (default: 10 ms, keeping backoff short).
+    retry_after: str | None = None
     reply: Callable[[dict[str, Any]], str] = default_reply
     #: If set, a request asking for structured output (``response_format``) gets 400, as
     #: from a server without it.
@@ -129,11 +133,19 @@ def _handler(state: ChatServer) -> type[BaseHTTPRequestHandler]:
                 self.send_response(status)
                 self.send_header("content-type", "application/json")
                 self.send_header("content-length", str(len(data)))
-                if status != 200:
-                    # Keeps the SDK's retry backoff short.
+                if status != 200 and state.retry_after is not None:
+                    self.send_header("retry-after", state.retry_after)
+                elif status != 200:
+                    # Keeps the retry backoff short.
                     self.send_header("retry-after-ms", "10")
                 self.end_headers()
-                self.wfile.write(data)
+                if not state.trickle_s:
+                    self.wfile.write(data)
+                    return
+                for k in range(len(data)):
+                    self.wfile.write(data[k:k + 1])
+                    self.wfile.flush()
+                    time.sleep(state.trickle_s)
 
         def log_message(self, format: str, *args: Any) -> None:
             pass

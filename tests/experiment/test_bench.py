@@ -202,3 +202,44 @@ def test_an_unusable_default_cache_is_left_out_with_a_warning(tmp_path: Path, mo
                  "--out", str(tmp_path / "x")]) == 0
     assert "no LLM cache: the default" in capsys.readouterr().err
     assert [r["llm_cache_hits"] for r in _rows(tmp_path / "x")] == [0]
+
+
+def test_a_second_bench_on_one_directory_is_refused(finished: Path, tmp_path: Path,
+                                                    capsys) -> None:
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "shared"
+    cmd = [sys.executable, "-c", "import sys; from llm_grop.cli import main; "
+           "sys.exit(main(sys.argv[1:]))", *BASE, "--out", str(out), "--workers", "1"]
+    first = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    lock = out / ".lock"
+    deadline = time.monotonic() + 120
+    while not (lock.exists() and lock.read_text().strip()) and first.poll() is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    # The first holds the lock from before its first trial to after its last (eight
+    # trials, seconds); the second is refused at once.
+    assert main(BASE + ["--out", str(out)]) == 2
+    assert first.poll() is None
+    assert _one_line_error(capsys) == (
+        f"llm-grop: error: --out {out}: in use by another llm-grop run on this directory "
+        f"(pid {first.pid}); wait for it to end or stop it")
+    assert first.wait(timeout=300) == 0
+    assert _stable(_rows(out)) == _stable(_rows(finished))  # exact: each trial once
+
+
+def test_resume_removes_duplicate_rows_keeping_the_first(finished: Path,
+                                                         tmp_path: Path) -> None:
+    import shutil
+
+    out = tmp_path / "doubled"
+    shutil.copytree(finished, out)
+    lines = (out / "trials.jsonl").read_text().splitlines(keepends=True)
+    changed = json.loads(lines[0]) | {"planning_time_s": 999.0}  # a later copy of trial 1
+    (out / "trials.jsonl").write_text("".join(lines + [json.dumps(changed) + "\n"] + lines))
+    assert main(BASE + ["--out", str(out)]) == 0
+    assert _rows(out) == _rows(finished)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary == json.loads((finished / "summary.json").read_text())

@@ -87,13 +87,45 @@ def test_cache_hits_are_marked_in_the_log_and_the_record_file(chat_server,
     assert [r.response for r in load_records(record)] == [lines[0]["response"]] * 2
 
 
-def test_a_damaged_entry_is_asked_again(chat_server, tmp_path: Path) -> None:
-    _log(chat_server, tmp_path).complete("p", PARAMS)
+POISONS = {
+    "not json": lambda d, text: "{not json",
+    "truncated": lambda d, text: text[: len(text) // 2],
+    "null answer": lambda d, text: json.dumps(d | {"record": d["record"] | {"response": None}}),
+    "a number": lambda d, text: json.dumps(d | {"record": 42}),
+    "the whole entry null": lambda d, text: "null",
+    "a negative latency": lambda d, text: json.dumps(
+        d | {"record": d["record"] | {"latency_s": -1}}),
+}
+
+
+@pytest.mark.parametrize("poison", sorted(POISONS))
+def test_a_damaged_entry_is_asked_again_and_rewritten(chat_server, tmp_path: Path, poison: str,
+                                                       caplog) -> None:
+    first = _log(chat_server, tmp_path).complete("p", PARAMS)
     (entry,) = tmp_path.glob("*/*.json")
-    entry.write_text("{not json")
-    assert not _log(chat_server, tmp_path).complete("p", PARAMS).cached
+    text = entry.read_text()
+    entry.write_text(POISONS[poison](json.loads(text), text))
+    with caplog.at_level("WARNING", logger="llm_grop.llm.cache"):
+        again = _log(chat_server, tmp_path).complete("p", PARAMS)
+    assert not again.cached and again.response == first.response
     assert len(chat_server.requests) == 2
+    assert [r.message for r in caplog.records if "ignoring bad entry" in r.message]
+    rewritten, original = json.loads(entry.read_text()), json.loads(text)  # rewritten whole
+    assert rewritten["key"] == original["key"]
+    assert rewritten["record"]["response"] == original["record"]["response"]
     assert _log(chat_server, tmp_path).complete("p", PARAMS).cached
+
+
+def test_an_entry_under_another_keys_name_is_not_served(chat_server, tmp_path: Path) -> None:
+    log = _log(chat_server, tmp_path)
+    log.complete("p", PARAMS)
+    log.complete("q", PARAMS)
+    p_entry, q_entry = sorted(tmp_path.glob("*/*.json"),
+                              key=lambda f: json.loads(f.read_text())["key"]["prompt"])
+    q_entry.write_text(p_entry.read_text())  # p's answer copied under q's name
+    answer = _log(chat_server, tmp_path).complete("q", PARAMS)
+    assert not answer.cached and answer.prompt == "q"
+    assert json.loads(q_entry.read_text())["key"]["prompt"] == "q"
 
 
 def _writer(root: str, worker: int, keys: int) -> None:

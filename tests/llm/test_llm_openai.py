@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import socket
+import time
 from collections import deque
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
@@ -133,7 +134,8 @@ def test_unreachable_without_retries_says_so(closed_port: int) -> None:
 def test_timeout_is_unavailable(chat_server: ChatServer) -> None:
     chat_server.delay_s = 1.0
     llm = make(chat_server, timeout_s=0.1, max_retries=0)
-    with pytest.raises(LLMUnavailable, match=r"cannot reach .* \(timed out after 0.1 s\)"):
+    with pytest.raises(LLMUnavailable,
+                       match=r"cannot reach .* \(no answer within the 0.1 s deadline\)"):
         llm.complete("hi", PARAMS)
 
 
@@ -182,3 +184,33 @@ def test_answer_without_usage_has_no_token_counts(chat_server: ChatServer) -> No
                              b'"content": "ok"}}]}'])
     record = make(chat_server).complete("hi", PARAMS)
     assert (record.response, record.prompt_tokens, record.completion_tokens) == ("ok", None, None)
+
+
+def test_a_trickling_server_is_bounded_by_the_whole_calls_deadline(
+        chat_server: ChatServer) -> None:
+    chat_server.trickle_s = 0.05  # a 400-byte answer would take 20 s
+    llm = make(chat_server, timeout_s=1.0, max_retries=2)
+    t0 = time.monotonic()
+    with pytest.raises(LLMUnavailable, match=r"no answer within the 1 s deadline"):
+        llm.complete("hi", PARAMS)
+    assert time.monotonic() - t0 < 1.5
+
+
+def test_a_retry_after_past_the_deadline_is_not_waited_for(chat_server: ChatServer) -> None:
+    chat_server.plan.extend([429, 429, 429])
+    chat_server.retry_after = "50"
+    llm = make(chat_server, timeout_s=3.0, max_retries=2)
+    t0 = time.monotonic()
+    with pytest.raises(LLMUnavailable) as info:
+        llm.complete("hi", PARAMS)
+    assert time.monotonic() - t0 < 1.0 and len(chat_server.requests) == 1
+    assert str(info.value).endswith("its next attempt (50.0 s later) would pass the 3 s "
+                                    "deadline")
+    assert "answered 429" in str(info.value)
+
+
+def test_a_huge_answer_is_refused_as_it_arrives(chat_server: ChatServer) -> None:
+    chat_server.reply = lambda body: "x" * (5 * 1024 * 1024)
+    llm = OpenAILLM(BackendOptions(base_url=chat_server.url, max_answer_bytes=1024 * 1024))
+    with pytest.raises(LLMUnavailable, match=r"is larger than 1048576 bytes; refused"):
+        llm.complete("hi", PARAMS)

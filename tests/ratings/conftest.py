@@ -2,31 +2,15 @@
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
-import sys
 from pathlib import Path
-from types import ModuleType
 
 import pytest
 
 from browser_support import screenshots  # noqa: F401 - a fixture for the browser test
 from llm_grop.cli import main
 from llm_grop.ratings.study import create_study, invite, items_from_bench
-
-ROOT = Path(__file__).resolve().parents[2]
-RECORDING = ROOT / "benchmarks" / "data" / "embedded_calls.jsonl"
-ADMIN = "test-admin-token-0123456789"
-
-
-def load_benchmark(name: str) -> ModuleType:
-    """A script under benchmarks/ as a module (the load test shares its driver)."""
-    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+from ratings_support import ADMIN, RECORDING, load_benchmark  # noqa: F401
 
 
 @pytest.fixture(scope="session")

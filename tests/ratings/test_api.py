@@ -12,11 +12,13 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from conftest import ADMIN
 from llm_grop.ratings.app import COOKIE, CSRF_HEADER, create_app
+from ratings_support import ADMIN
 
 METHODS = ("tpra", "latp", "grop", "llm-grop")
 BEARER = {"Authorization": f"Bearer {ADMIN}"}
+#: The Origin a browser sends with the site's own forms (the test client's host).
+SAME = {"origin": "http://testserver"}
 
 
 @pytest.fixture
@@ -150,7 +152,8 @@ def test_writes_need_the_sessions_csrf_token(client: TestClient, study) -> None:
     other_csrf = join(TestClient(client.app), codes[1])
     refused(client.post("/api/ratings", json=body, headers={CSRF_HEADER: other_csrf}), 403,
             "CSRF")
-    form = client.post("/rate", data={"item": item, "rating": "3", "csrf": "wrong"})
+    form = client.post("/rate", data={"item": item, "rating": "3", "csrf": "wrong"},
+                       headers=SAME)
     assert form.status_code == 403 and "CSRF" in form.text
     refused(client.delete("/api/session"), 403, "CSRF")
     assert client.post("/api/ratings", json=body, headers={CSRF_HEADER: csrf}).status_code == 201
@@ -240,16 +243,57 @@ def test_admin_endpoints_need_the_token(client: TestClient, study) -> None:
 
 
 def test_forms_from_another_site_are_refused(client: TestClient, study) -> None:
-    r = client.post("/join", data={"code": study[1][0]},
-                    headers={"origin": "https://evil.example"}, follow_redirects=False)
-    assert r.status_code == 403
-    r = client.post("/join", data={"code": study[1][0]}, follow_redirects=False)
+    for origin in ("https://evil.example", "null", None):
+        headers = {"origin": origin} if origin else {}
+        r = client.post("/join", data={"code": study[1][0]}, headers=headers,
+                        follow_redirects=False)
+        assert r.status_code == 403 and "another site" in r.text
+    r = client.post("/join", data={"code": study[1][0]}, headers=SAME,
+                    follow_redirects=False)
     assert r.status_code == 303 and r.headers["location"] == "/guidelines"
+    page = client.get("/rate")
+    item = page.text.split('data-item="', 1)[1].split('"', 1)[0]
+    for path, data in (("/rate", {"item": item, "rating": "4", "csrf": _page_csrf(page.text)}),
+                       ("/leave", {"csrf": _page_csrf(page.text)})):
+        r = client.post(path, data=data, headers={"origin": "null"})
+        assert r.status_code == 403, path
 
 
 def test_a_huge_body_is_refused_unread(client: TestClient, study) -> None:
     refused(client.post("/api/session", content=b'{"code": "' + b"A" * 100_000 + b'"}',
                         headers={"content-type": "application/json"}), 413, "larger than")
+
+    def chunks():
+        for _ in range(100):
+            yield b"A" * 1024
+
+    # Chunked: no length is declared; the server stops reading at its limit.
+    refused(client.post("/api/session", content=chunks(),
+                        headers={"content-type": "application/json"}), 413, "larger than")
+
+
+def test_join_attempts_are_limited_per_address(client: TestClient, study) -> None:
+    from llm_grop.ratings.app import JOINS_PER_MINUTE
+
+    for _ in range(JOINS_PER_MINUTE):
+        refused(client.post("/api/session", json={"code": "WRONG-CODE"}), 401, "unknown")
+    r = client.post("/api/session", json={"code": study[1][0]})
+    refused(r, 429, "too many join attempts from this address")
+    assert 1 <= int(r.headers["retry-after"]) <= 60
+    r = client.post("/join", data={"code": study[1][0]}, headers=SAME, follow_redirects=False)
+    assert r.status_code == 429 and r.headers["retry-after"].isdigit()
+
+
+def test_a_rater_keeps_at_most_five_sessions(study) -> None:
+    from llm_grop.ratings.store import MAX_SESSIONS
+
+    db, codes = study
+    with TestClient(create_app(db, admin_token=ADMIN)) as c:
+        for _ in range(8):
+            c.cookies.clear()
+            join(c, codes[0])
+    with sqlite3.connect(db) as conn:
+        assert conn.execute("SELECT count(*) FROM sessions").fetchone()[0] == MAX_SESSIONS
 
 
 def test_unknown_routes_and_methods_are_json_errors(client: TestClient) -> None:
@@ -259,19 +303,19 @@ def test_unknown_routes_and_methods_are_json_errors(client: TestClient) -> None:
 
 def test_pages_without_javascript(client: TestClient, study) -> None:
     assert "Invite code" in client.get("/").text
-    r = client.post("/join", data={"code": "nope"})
+    r = client.post("/join", data={"code": "nope"}, headers=SAME)
     assert r.status_code == 401 and "unknown invite code" in r.text
-    guidelines = client.post("/join", data={"code": study[1][0]})
+    guidelines = client.post("/join", data={"code": study[1][0]}, headers=SAME)
     assert guidelines.status_code == 200 and "experienced human waiter" in guidelines.text
     page = client.get("/rate")
     assert "1 / 16" in page.text
     item = page.text.split('data-item="', 1)[1].split('"', 1)[0]
     after = client.post("/rate", data={"item": item, "rating": "4",
-                                       "csrf": _page_csrf(page.text)})
+                                       "csrf": _page_csrf(page.text)}, headers=SAME)
     assert after.status_code == 200 and "2 / 16" in after.text
     bad = client.post("/rate", data={"item": item, "rating": "four",
-                                     "csrf": _page_csrf(page.text)})
+                                     "csrf": _page_csrf(page.text)}, headers=SAME)
     assert bad.status_code == 422 and "rating" in bad.text
-    left = client.post("/leave", data={"csrf": _page_csrf(page.text)})
+    left = client.post("/leave", data={"csrf": _page_csrf(page.text)}, headers=SAME)
     assert left.status_code == 200 and "Invite code" in left.text
     assert client.get("/rate").status_code == 401

@@ -14,8 +14,8 @@ from pathlib import Path
 from playwright.sync_api import expect, sync_playwright
 
 from browser_support import CHROMIUM, DESKTOP, FLAGS, PHONE, fits
-from conftest import load_benchmark
 from llm_grop.cli import main
+from ratings_support import load_benchmark
 
 
 def test_a_rater_rates_with_the_keyboard_leaves_and_comes_back(

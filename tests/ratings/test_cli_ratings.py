@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ADMIN, load_benchmark
 from llm_grop.cli import main
 from llm_grop.ratings.store import EXPORT_COLUMNS
+from ratings_support import ADMIN, load_benchmark
 
 
 def one_line_error(capsys) -> str:

@@ -56,8 +56,13 @@ _LLM_OPTIONS = [
     click.option("--max-tokens", default=512, show_default=True, type=click.IntRange(1)),
     click.option("--frequency-penalty", default=0.0, show_default=True, type=float),
     click.option("--presence-penalty", default=0.0, show_default=True, type=float),
-    click.option("--timeout", "timeout_s", default=60.0, show_default=True, type=float,
-                 help="Seconds per LLM request."),
+    click.option("--timeout", "timeout_s", default=60.0, show_default=True,
+                 type=click.FloatRange(0, min_open=True),
+                 help="Seconds one LLM call may take, retries and their waits included."),
+    click.option("--max-answer-bytes", default=1024 * 1024, show_default=True,
+                 type=click.IntRange(1),
+                 help="The largest LLM answer accepted, bytes (openai); a larger one is an "
+                      "error."),
     click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
                  help="Retries on transient LLM errors (connection, 429, 5xx)."),
 ]
@@ -293,7 +298,7 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
                  temperature: float, top_p: float, max_tokens: int, frequency_penalty: float,
                  presence_penalty: float, timeout_s: float, retries: int,
                  prefer: tuple[str, ...] = (), preferences_file: Path | None = None,
-                 **_: Any) -> tuple[Any, Any]:
+                 max_answer_bytes: int = 1024 * 1024, **_: Any) -> tuple[Any, Any]:
     """``(BackendOptions, ArrangeOptions)`` from the flags of :func:`llm_flags`."""
     from llm_grop.arrangement.pipeline import ArrangeOptions
     from llm_grop.llm.base import BackendOptions, SamplingParams
@@ -308,7 +313,8 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
                              notes=notes, params=params, preferences=tuple(prefer),
                              preference_pool=pool)
     llm_options = BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
-                                 max_retries=retries, replay_path=replay_path)
+                                 max_retries=retries, replay_path=replay_path,
+                                 max_answer_bytes=max_answer_bytes)
     return llm_options, options
 
 

@@ -7,7 +7,6 @@ writes the figures of merit from the human ratings.
 
 from __future__ import annotations
 
-import os
 import secrets
 import socket
 from pathlib import Path
@@ -94,8 +93,14 @@ def invite(db: Path, count: int) -> None:
 @click.option("--session-hours", default=8.0, show_default=True,
               type=click.FloatRange(min=0.01, max=24 * 30),
               help="How long a rater's session lasts.")
+@click.option("--forwarded-allow-ips", "proxy_ips", envvar="FORWARDED_ALLOW_IPS",
+              show_envvar=True, default="127.0.0.1", show_default=True,
+              help="Addresses of the HTTPS proxies whose X-Forwarded-For and "
+                   "X-Forwarded-Proto are trusted (comma-separated, or *). Behind a proxy "
+                   "on another host, list it: else cookies lack the Secure flag and every "
+                   "rater shares the proxy's address for the join limit.")
 def serve(db: Path, host: str, port: int, admin_token: str | None,
-          session_hours: float) -> None:
+          session_hours: float, proxy_ips: str) -> None:
     """Serve the rating website for the study in the database."""
     _extra("fastapi")
     _extra("uvicorn")
@@ -123,8 +128,7 @@ def serve(db: Path, host: str, port: int, admin_token: str | None,
         click.echo(f"Admin token: {token} (give --admin-token or set LLM_GROP_ADMIN_TOKEN "
                    "to choose one)", err=True)
     config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=True,
-                            forwarded_allow_ips=os.environ.get("FORWARDED_ALLOW_IPS",
-                                                               "127.0.0.1"))
+                            forwarded_allow_ips=proxy_ips)
     uvicorn.Server(config).run(sockets=[sock])
 
 

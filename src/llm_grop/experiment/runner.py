@@ -10,6 +10,8 @@ An output directory holds one experiment:
   an interrupted run loses no finished trial. A rerun skips the trials already there.
   When every trial is done the file is rewritten in ``(task, trial, method)`` order.
 * ``images/``: each trial's final table, the requested objects listed at the top.
+* ``.lock``: held by the run writing the directory (:mod:`llm_grop.locking`), so a second
+  run on it is refused at once, naming the first's process id.
 * ``summary.json``, ``summary.md`` and the paper's plots, ``fig3_rating_vs_time.png`` and
   ``fig5_rating_per_task.png``, made from every row.
 
@@ -29,13 +31,14 @@ import hashlib
 import json
 import logging
 import os
+import secrets
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from importlib import metadata, resources
 from pathlib import Path
 from typing import Any
 
-from llm_grop import plugins
+from llm_grop import locking, plugins
 from llm_grop.errors import BadInput
 from llm_grop.execution.policy import NAV_ATTEMPTS
 from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
@@ -54,6 +57,8 @@ from llm_grop.world.serialize import read_doc
 log = logging.getLogger(__name__)
 
 ROWS = "trials.jsonl"
+#: The lock file one run holds in each results directory it writes.
+LOCK = ".lock"
 IDENTITY = "experiment.json"
 
 
@@ -158,7 +163,8 @@ def prepare_dir(out: Path, exp: Experiment) -> None:
 
 
 def read_rows(out: Path) -> list[TrialRow]:
-    """The finished trials' rows; a last line cut off by a crash is dropped."""
+    """The finished trials' rows, each ``(method, task, trial)`` once (the first written);
+    a last line cut off by a crash is dropped."""
     path = out / ROWS
     if not path.exists():
         return []
@@ -172,7 +178,15 @@ def read_rows(out: Path) -> list[TrialRow]:
                 break
             raise BadInput(f"{path} line {i + 1}: not a JSON row") from None
         rows.append(read_doc(TrialRow, data, f"{path} line {i + 1}"))
-    return rows
+    first: dict[tuple[str, int, int], TrialRow] = {}
+    for row in rows:
+        first.setdefault(_key(row), row)
+    if len(first) < len(rows):
+        # Two runs wrote here before runs took the directory's lock; the first row of a
+        # trial is kept, and the next resume rewrites the file without the others.
+        log.warning("%s: %d duplicate rows ignored (the first of each trial is kept)", path,
+                    len(rows) - len(first))
+    return list(first.values())
 
 
 def _key(row: TrialRow) -> tuple[str, int, int]:
@@ -236,6 +250,22 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
     registered = plugins.registered(used) if executor.spawns else {}
     for cell in cells:
         prepare_dir(cell.out, cell.experiment)
+    held: list[int] = []
+    try:
+        for cell in cells:
+            held.append(locking.hold(cell.out / LOCK, f"--out {cell.out}",
+                                     "another llm-grop run on this directory"))
+        return _run_locked(cells, executor, registered, on_start, on_row, keep_rows)
+    finally:
+        for fd in held:
+            locking.release(fd)
+
+
+def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
+                on_start: Callable[[int, int], None] | None,
+                on_row: Callable[[int, TrialRow], None] | None,
+                keep_rows: bool) -> tuple[Outcome, ...]:
+    """:func:`run_cells` once every directory is checked and locked."""
     jobs: list[Job] = []
     skipped: list[int] = []
     for index, cell in enumerate(cells):
@@ -309,7 +339,7 @@ def _rewrite(out: Path, rows: list[TrialRow]) -> None:
 
 def _write_lines(out: Path, lines: list[str]) -> None:
     """Write ``lines`` (each ending in a newline) as the results file, atomically."""
-    tmp = out / f".{ROWS}.tmp"
+    tmp = out / f".{ROWS}.{os.getpid()}-{secrets.token_hex(4)}.tmp"
     with tmp.open("w", encoding="utf-8") as f:
         f.writelines(lines)
         f.flush()

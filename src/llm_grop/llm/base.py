@@ -40,8 +40,9 @@ class BackendOptions:
 
     ``model``: model name (openai) or GGUF path (embedded); ``None`` for the default.
     ``base_url``/``api_key``: for openai (default: ``OPENAI_BASE_URL``/``OPENAI_API_KEY``).
-    ``timeout_s``: per-request timeout in seconds. ``max_retries``: retries with
-    exponential backoff on transient errors (connection, 429, 5xx).
+    ``timeout_s``: seconds one call may take, retries and their waits included.
+    ``max_retries``: retries with exponential backoff on transient errors (connection, 429,
+    5xx). ``max_answer_bytes``: the largest answer accepted, bytes.
     ``replay_path``: the JSONL file the replay backend reads.
     ``n_threads``: CPU threads for the embedded model (``None``: all cores).
     """
@@ -51,6 +52,7 @@ class BackendOptions:
     api_key: str | None = None
     timeout_s: float = 60.0
     max_retries: int = 3
+    max_answer_bytes: int = 1024 * 1024
     replay_path: Path | None = None
     n_threads: int | None = None
 

@@ -13,7 +13,9 @@ Layout: ``DIR/ab/abcdef....json``, one JSON object per answer (the key's fields 
 call's record). A file is written beside its final name and renamed onto it
 (:func:`os.replace`), so concurrent writers on one machine never leave a half-written
 answer: a reader sees the whole file or none, and two writers of one key write the same
-answer. Nothing is ever rewritten or deleted; remove the directory to empty the cache.
+answer. An entry that does not read back whole, or whose stored key is not the one asked
+for, is asked again and rewritten; nothing else is ever rewritten or deleted. Remove the
+directory to empty the cache.
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from llm_grop.llm.record import LLMCallRecord
+from llm_grop.errors import LLMError
+from llm_grop.llm.record import LLMCallRecord, record_from_dict
 
 log = logging.getLogger(__name__)
 
@@ -73,6 +76,11 @@ class CallKey:
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+def _plain(data: Any) -> Any:
+    """``data`` as it reads back from JSON (tuples become lists)."""
+    return json.loads(json.dumps(data, ensure_ascii=False))
+
+
 class LLMCache:
     """The answers under ``root`` (created on the first write)."""
 
@@ -84,16 +92,26 @@ class LLMCache:
         return self.root / digest[:2] / f"{digest}.json"
 
     def get(self, key: CallKey) -> LLMCallRecord | None:
-        """The answer stored for ``key``, marked ``cached``, or ``None``."""
+        """The answer stored for ``key``, marked ``cached``, or ``None``.
+
+        An entry is served only if it is whole and its stored key is ``key``: a damaged
+        entry (a disk error, a truncated file, a hand edit, a ``null`` answer) or one
+        copied under another key's name is a miss, with one warning, and the answer asked
+        again replaces it."""
         path = self._path(key)
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-            record = LLMCallRecord(**data["record"])
+            if not isinstance(data, dict):
+                raise ValueError("not a JSON object")
+            if data.get("key") != _plain(asdict(key)):
+                raise ValueError("it was stored for another call")
+            record = record_from_dict(data.get("record"), "record")
+            if record.prompt != key.prompt:
+                raise ValueError("its prompt is another call's")
         except FileNotFoundError:
             return None
-        except (OSError, ValueError, TypeError, KeyError) as exc:
-            # A damaged entry (a disk error, a hand edit) is asked again, not trusted.
-            log.warning("LLM cache: ignoring unreadable entry %s (%s)", path, exc)
+        except (OSError, ValueError, LLMError) as exc:
+            log.warning("LLM cache: ignoring bad entry %s (%s); asking again", path, exc)
             return None
         return replace(record, cached=True)
 

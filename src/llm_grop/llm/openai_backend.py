@@ -8,10 +8,16 @@ llama.cpp server) through the official ``openai`` SDK.
 - API key: ``BackendOptions.api_key``, else ``OPENAI_API_KEY``, else the placeholder
   :data:`PLACEHOLDER_API_KEY`, which local servers accept and OpenAI refuses (401).
 - Model: ``BackendOptions.model``, else :data:`DEFAULT_MODEL`.
-- Retries: the SDK itself retries connection errors, timeouts, 408, 409, 429 and
-  5xx answers up to ``max_retries`` times with exponential backoff (0.5 s doubling
-  to at most 8 s, with jitter), honouring the server's ``retry-after-ms`` and
-  ``retry-after`` headers; this module adds no retry loop of its own.
+- A deadline: ``BackendOptions.timeout_s`` bounds the whole call, every attempt, the
+  reading of each answer and the waits between attempts included, so a server that
+  trickles its answer a byte at a time, or asks to be retried much later, cannot hold a
+  run longer than that.
+- Retries: connection errors, 408, 409, 429 and 5xx answers are retried up to
+  ``max_retries`` times with exponential backoff (0.5 s doubling to at most 8 s, with
+  jitter), honouring the server's ``retry-after-ms`` and ``retry-after`` headers, as
+  long as the deadline allows.
+- A size cap: an answer larger than ``BackendOptions.max_answer_bytes`` is refused as it
+  arrives.
 - Grammars: chat-completions has no GBNF support, so ``grammar`` is ignored.
 - Structured output: given a ``schema``, the request asks for JSON that follows it
   (``response_format`` of type ``json_schema``, strict). A server that turns this down
@@ -21,7 +27,10 @@ llama.cpp server) through the official ``openai`` SDK.
 
 from __future__ import annotations
 
+import email.utils
+import json
 import os
+import random
 import re
 import time
 from collections.abc import Mapping
@@ -60,13 +69,16 @@ class OpenAILLM:
         api_key = options.api_key or os.environ.get("OPENAI_API_KEY") or PLACEHOLDER_API_KEY
         self._max_retries = options.max_retries
         self._timeout_s = options.timeout_s
+        self._max_bytes = options.max_answer_bytes
+        self._jitter = random.Random()
         try:
             # base_url=None lets the SDK read OPENAI_BASE_URL.
+            # Retries are this module's, within the call's deadline.
             self._client = openai.OpenAI(
                 base_url=options.base_url or None,
                 api_key=api_key,
                 timeout=options.timeout_s,
-                max_retries=options.max_retries,
+                max_retries=0,
             )
         except (openai.OpenAIError, ValueError, TypeError) as exc:
             raise LLMUnavailable(f"openai backend: cannot configure the client: {_one_line(exc)}"
@@ -97,25 +109,28 @@ class OpenAILLM:
             kwargs["response_format"] = {"type": "json_schema", "json_schema": {
                 "name": "answer", "schema": dict(schema), "strict": True}}
         start = time.perf_counter()
+        deadline = time.monotonic() + self._timeout_s
         try:
+            response = self._retried(kwargs, deadline)
+        except (openai.BadRequestError, openai.UnprocessableEntityError) as exc:
+            if "response_format" not in kwargs:
+                raise self._unavailable(exc) from None
+            # The server has no structured output; the prompt's own format still reads.
+            self.structured_output = False
+            del kwargs["response_format"]
             try:
-                response = self._client.chat.completions.create(**kwargs)
-            except (openai.BadRequestError, openai.UnprocessableEntityError):
-                if "response_format" not in kwargs:
-                    raise
-                # The server has no structured output; the prompt's own format still reads.
-                self.structured_output = False
-                del kwargs["response_format"]
-                response = self._client.chat.completions.create(**kwargs)
-            else:
-                if "response_format" in kwargs:
-                    self.structured_output = True
+                response = self._retried(kwargs, deadline)
+            except openai.OpenAIError as exc:
+                raise self._unavailable(exc) from None
         except openai.OpenAIError as exc:
             raise self._unavailable(exc) from None
         except ValueError as exc:
-            # The SDK lets a 200 answer whose body is not JSON through as a decode error.
+            # A 200 answer whose body is not JSON.
             raise LLMUnavailable(f"openai backend: unreadable answer from {self.base_url}: "
                                  f"{_one_line(exc)}") from None
+        else:
+            if "response_format" in kwargs:
+                self.structured_output = True
         latency_s = time.perf_counter() - start
         text, prompt_tokens, completion_tokens = self._read(response)
         return LLMCallRecord(
@@ -129,17 +144,71 @@ class OpenAILLM:
             seed=params.seed,
         )
 
+    def _retried(self, kwargs: dict[str, Any], deadline: float) -> Any:
+        """The answer's JSON, asked up to ``1 + max_retries`` times before ``deadline``
+        (a :func:`time.monotonic` time); the last failure is raised."""
+        attempt = 0
+        while True:
+            try:
+                return self._attempt(kwargs, deadline)
+            except (openai.APIConnectionError, openai.APIStatusError) as exc:
+                retryable = isinstance(exc, openai.APIConnectionError) and not isinstance(
+                    exc, openai.APITimeoutError) or isinstance(exc, openai.APIStatusError) and (
+                    exc.status_code in (408, 409, 429) or exc.status_code >= 500)
+                if not retryable or attempt >= self._max_retries:
+                    raise
+                wait = self._wait(exc, attempt)
+                if time.monotonic() + wait >= deadline:
+                    raise _PastDeadline(exc, wait) from None
+                time.sleep(wait)
+                attempt += 1
+
+    def _attempt(self, kwargs: dict[str, Any], deadline: float) -> Any:
+        """One request; its answer read as it arrives, within ``deadline`` and the size
+        cap."""
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
+        with self._client.chat.completions.with_streaming_response.create(
+                **kwargs, timeout=remaining) as raw:
+            chunks, size = [], 0
+            for chunk in raw.iter_bytes():
+                size += len(chunk)
+                if size > self._max_bytes:
+                    raise _TooLarge(size)
+                if time.monotonic() > deadline:
+                    raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
+                chunks.append(chunk)
+        return json.loads(b"".join(chunks))
+
+    def _wait(self, exc: Exception, attempt: int) -> float:
+        """Seconds before the next attempt: the server's Retry-After, else backoff."""
+        response = getattr(exc, "response", None)
+        headers = getattr(response, "headers", None) or {}
+        for name, scale in (("retry-after-ms", 0.001), ("retry-after", 1.0)):
+            value = headers.get(name)
+            if value is not None:
+                try:
+                    return max(float(value) * scale, 0.0)
+                except ValueError:
+                    when = email.utils.parsedate_to_datetime(value) if value else None
+                    if when is not None:
+                        return max(when.timestamp() - time.time(), 0.0)
+        return min(0.5 * 2 ** attempt, 8.0) * self._jitter.uniform(0.75, 1.0)
+
     def _read(self, response: Any) -> tuple[str, int | None, int | None]:
-        """The reply text and token counts; the SDK does not validate answers, so we do."""
+        """The reply text and token counts from the answer's JSON; answers are checked
+        here, not trusted."""
         try:
-            text = response.choices[0].message.content
+            text = response["choices"][0]["message"]["content"]
             if text is not None and not isinstance(text, str):
                 raise TypeError(type(text))
         except (AttributeError, IndexError, KeyError, TypeError):
             raise LLMUnavailable(f"openai backend: malformed answer from {self.base_url}: "
                                  f"no text in choices[0].message.content") from None
-        usage = getattr(response, "usage", None)
-        counts = [getattr(usage, key, None) for key in ("prompt_tokens", "completion_tokens")]
+        usage = response.get("usage") if isinstance(response, dict) else None
+        usage = usage if isinstance(usage, dict) else {}
+        counts = [usage.get(key) for key in ("prompt_tokens", "completion_tokens")]
         prompt_tokens, completion_tokens = (
             n if isinstance(n, int) and not isinstance(n, bool) else None for n in counts)
         # A refusal or a tool call leaves content empty; an empty reply is still a reply.
@@ -152,10 +221,18 @@ class OpenAILLM:
     def _unavailable(self, exc: openai.OpenAIError) -> LLMUnavailable:
         """The one-line error for a failed request."""
         where = self.base_url
+        if isinstance(exc, _TooLarge):
+            return LLMUnavailable(f"openai backend: the answer from {where} is larger than "
+                                  f"{self._max_bytes} bytes; refused (raise "
+                                  f"--max-answer-bytes if it should be allowed)")
+        if isinstance(exc, _PastDeadline):
+            first = self._unavailable(exc.cause)
+            return LLMUnavailable(f"{str(first).removesuffix(self._after_retries())}; its "
+                                  f"next attempt ({exc.wait_s:.1f} s later) would pass the "
+                                  f"{self._timeout_s:g} s deadline")
         if isinstance(exc, openai.APITimeoutError):
-            reason = f"timed out after {self._timeout_s:g} s"
-            return LLMUnavailable(f"openai backend: cannot reach {where} ({reason})"
-                                  f"{self._after_retries()}")
+            reason = f"no answer within the {self._timeout_s:g} s deadline"
+            return LLMUnavailable(f"openai backend: cannot reach {where} ({reason})")
         if isinstance(exc, openai.APIConnectionError):
             return LLMUnavailable(f"openai backend: cannot reach {where} "
                                   f"({_root_cause(exc)}){self._after_retries()}")
@@ -180,6 +257,21 @@ class OpenAILLM:
         if n == 0:
             return " (retries disabled)"
         return f" after {n} {'retry' if n == 1 else 'retries'}"
+
+
+class _TooLarge(openai.OpenAIError):
+    """An answer over the size cap (bytes received so far)."""
+
+    def __init__(self, size: int) -> None:
+        super().__init__(f"{size} bytes")
+
+
+class _PastDeadline(openai.OpenAIError):
+    """A retryable failure whose next attempt would come after the call's deadline."""
+
+    def __init__(self, cause: openai.OpenAIError, wait_s: float) -> None:
+        super().__init__(str(cause))
+        self.cause, self.wait_s = cause, wait_s
 
 
 def _root_cause(exc: BaseException) -> str:

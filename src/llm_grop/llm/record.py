@@ -97,6 +97,12 @@ def _parse_line(path: Path, number: int, line: str) -> LLMCallRecord:
     except json.JSONDecodeError as exc:
         raise LLMError(f"{where}: malformed replay record: {exc.msg} at column {exc.colno}"
                        ) from None
+    return record_from_dict(data, where)
+
+
+def record_from_dict(data: object, where: str) -> LLMCallRecord:
+    """A call record from its JSON object, every field checked; :class:`LLMError` naming
+    ``where`` and the field otherwise."""
     if not isinstance(data, dict):
         raise LLMError(f"{where}: malformed replay record: expected a JSON object")
     for key in _REQUIRED_STR:

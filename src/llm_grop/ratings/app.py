@@ -11,7 +11,10 @@ endpoints need ``Authorization: Bearer <admin token>``.
 from __future__ import annotations
 
 import contextlib
+import math
 import secrets
+import time
+from collections import deque
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Annotated, Any
@@ -35,9 +38,12 @@ from llm_grop.ratings.store import (
     export_csv,
     image_url,
 )
+from llm_grop.web import GONE, TOO_LARGE, read_body, replaying, same_origin
 
 COOKIE = "llm_grop_session"
 CSRF_HEADER = "X-CSRF-Token"
+#: Join attempts one client address may make in a minute.
+JOINS_PER_MINUTE = 10
 #: The largest request body accepted, bytes: a rating or a join is a few dozen.
 MAX_BODY_BYTES = 16 * 1024
 #: Headers on every answer: no framing, no sniffing, no referrer, nothing from elsewhere.
@@ -45,15 +51,17 @@ SECURITY_HEADERS = {
     "Content-Security-Policy": "default-src 'self'; img-src 'self'; script-src 'self'; "
                                "style-src 'self'; frame-ancestors 'none'; form-action 'self'",
     "X-Content-Type-Options": "nosniff",
-    "Referrer-Policy": "no-referrer",
+    # same-origin, not no-referrer: under no-referrer a browser posts forms with "Origin:
+    # null", and the site could not tell its own forms from another site's.
+    "Referrer-Policy": "same-origin",
     "X-Frame-Options": "DENY",
 }
 
 
 class Hardening:
     """ASGI middleware: :data:`SECURITY_HEADERS` on every answer, ``no-store`` on pages and
-    the API (whose answers are a rater's own), and 413 for a body declared larger than
-    :data:`MAX_BODY_BYTES`."""
+    the API (whose answers are a rater's own), and 413 for a body larger than
+    :data:`MAX_BODY_BYTES`, declared or as read (a chunked body is read no further)."""
 
     def __init__(self, app: ASGIApp) -> None:
         self.app = app
@@ -73,13 +81,43 @@ class Hardening:
                     headers["Cache-Control"] = "no-store"
             await send(message)
 
-        length = dict(scope["headers"]).get(b"content-length", b"0")
-        if not length.isdigit() or int(length) > MAX_BODY_BYTES:
+        body = await read_body(receive, MAX_BODY_BYTES,
+                               dict(scope["headers"]).get(b"content-length"))
+        if body is GONE:
+            return
+        if body is TOO_LARGE:
             too_big = JSONResponse({"error": f"request body larger than {MAX_BODY_BYTES} "
                                              "bytes"}, status_code=413)
             await too_big(scope, receive, with_headers)
             return
-        await self.app(scope, receive, with_headers)
+        assert isinstance(body, bytes)
+        await self.app(scope, replaying(body, receive), with_headers)
+
+
+class JoinLimit:
+    """At most :data:`JOINS_PER_MINUTE` join attempts per client address in any minute, so
+    invite codes cannot be guessed quickly; more are refused with 429 and
+    ``Retry-After``."""
+
+    def __init__(self, per_minute: int = JOINS_PER_MINUTE) -> None:
+        self.per_minute = per_minute
+        self.seen: dict[str, deque[float]] = {}
+
+    def check(self, request: Request) -> None:
+        """Count one attempt from ``request``'s address, or refuse it."""
+        now = time.monotonic()
+        address = request.client.host if request.client is not None else "?"
+        recent = self.seen.setdefault(address, deque())
+        while recent and now - recent[0] >= 60:
+            recent.popleft()
+        if len(recent) >= self.per_minute:
+            wait = max(1, math.ceil(60 - (now - recent[0])))
+            raise Refused(429, f"too many join attempts from this address; try again in "
+                               f"{wait} s", headers={"Retry-After": str(wait)})
+        recent.append(now)
+        if len(self.seen) > 10_000:  # forget idle addresses, so memory stays bounded
+            for key in [k for k, v in self.seen.items() if not v or now - v[-1] >= 60]:
+                del self.seen[key]
 
 
 class JoinBody(BaseModel):
@@ -127,10 +165,12 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
     @app.exception_handler(Refused)
     async def refused(request: Request, exc: Refused) -> Response:
         if _is_api(request):
-            return JSONResponse({"error": exc.message}, status_code=exc.status)
+            return JSONResponse({"error": exc.message}, status_code=exc.status,
+                                headers=exc.headers)
         if exc.status == 401:
             return HTMLResponse(render("join.html", error=exc.message), status_code=401)
-        return HTMLResponse(render("error.html", error=exc.message), status_code=exc.status)
+        return HTMLResponse(render("error.html", error=exc.message), status_code=exc.status,
+                            headers=exc.headers)
 
     @app.exception_handler(RequestValidationError)
     async def invalid(request: Request, exc: RequestValidationError) -> Response:
@@ -142,8 +182,11 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
 
     # ---- the JSON API -------------------------------------------------------------------
 
+    joins = JoinLimit()
+
     @app.post("/api/session")
     async def api_join(body: JoinBody, request: Request, rs: Store) -> Response:
+        joins.check(request)
         session = rs.join(body.code)
         done, total = rs.progress(session.rater_id)
         response = JSONResponse({"rater": session.rater, "csrf": session.csrf, "done": done,
@@ -197,6 +240,7 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
     async def join_form(code: Annotated[str, Form(max_length=100)], request: Request,
                   rs: Store) -> Response:
         _check_origin(request)
+        joins.check(request)
         session = rs.join(code)
         response = RedirectResponse("/guidelines", status_code=303)
         _set_cookie(response, request, session, ttl_s)
@@ -221,6 +265,7 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
                   rating: Annotated[str, Form(max_length=10)],
                   csrf: Annotated[str, Form(max_length=100)], request: Request,
                   rs: Store) -> Response:
+        _check_origin(request)
         session = _session(request, rs)
         _check_csrf(session, csrf)
         value: object = int(rating) if rating.isdigit() and rating.isascii() else rating
@@ -230,6 +275,7 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
     @app.post("/leave")
     async def leave_form(csrf: Annotated[str, Form(max_length=100)], request: Request,
                    rs: Store) -> Response:
+        _check_origin(request)
         _check_csrf(_session(request, rs), csrf)
         rs.end(request.cookies[COOKIE])
         response = RedirectResponse("/", status_code=303)
@@ -254,11 +300,10 @@ def _check_csrf(session: Session, token: str | None) -> None:
 
 
 def _check_origin(request: Request) -> None:
-    """Refuse a form posted from another site (the join form has no token yet)."""
-    origin = request.headers.get("origin")
-    if origin is not None and origin != "null" and \
-            origin.rstrip("/") != f"{request.url.scheme}://{request.url.netloc}":
-        raise Refused(403, "form posted from another site")
+    """Refuse a form posted from another site, or without an Origin to tell (a login
+    CSRF needs no token: the join form has none yet)."""
+    if not same_origin(request.headers.get("origin"), request.headers.get("host")):
+        raise Refused(403, "form posted from another site (or without an Origin header)")
 
 
 def _check_admin(request: Request, token: str) -> None:

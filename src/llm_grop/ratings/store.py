@@ -29,13 +29,20 @@ EXPORT_COLUMNS = ("rater", "item", "task", "trial", "seed", "method", "rating",
                   "automatic_rating", "execution_time_s", "rated_at")
 
 
-class Refused(Exception):
-    """A request the website refuses: ``status`` (4xx) and a one-line ``message``."""
+#: Live sessions one rater may have (a phone, a laptop, ...); joining again ends the oldest.
+MAX_SESSIONS = 5
 
-    def __init__(self, status: int, message: str) -> None:
+
+class Refused(Exception):
+    """A request the website refuses: ``status`` (4xx), a one-line ``message`` and headers
+    to send with it (``Retry-After``)."""
+
+    def __init__(self, status: int, message: str,
+                 headers: dict[str, str] | None = None) -> None:
         super().__init__(message)
         self.status = status
         self.message = message
+        self.headers = headers or {}
 
 
 @dataclass(frozen=True)
@@ -104,6 +111,12 @@ class RatingStore:
         now = self.clock()
         with transaction(self.conn):
             self.conn.execute("DELETE FROM sessions WHERE expires_at <= ?", (now,))
+            # A rater keeps at most MAX_SESSIONS live sessions: joining again ends the
+            # oldest, so repeated joins cannot grow the table without bound.
+            self.conn.execute(
+                "DELETE FROM sessions WHERE rater_id = ? AND rowid NOT IN (SELECT rowid FROM "
+                "sessions WHERE rater_id = ? ORDER BY expires_at DESC LIMIT ?)",
+                (row["id"], row["id"], MAX_SESSIONS - 1))
             self.conn.execute("INSERT INTO sessions (token_hash, rater_id, csrf, expires_at)"
                               " VALUES (?, ?, ?, ?)",
                               (_digest(token), row["id"], csrf, now + self.ttl_s))

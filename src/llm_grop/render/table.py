@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import functools
 import math
+import os
+import secrets
 import textwrap
 import zlib
 from collections.abc import Sequence
@@ -112,7 +114,7 @@ def save_png(fig: Figure, path: Path, *, dpi: int = DPI) -> None:
     The PNG carries no software or time stamp, so the same figure gives the same bytes.
     Raises :class:`BadInput` (one line, naming ``path``) if it cannot be written.
     """
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
     try:
         fig.savefig(tmp, format="png", dpi=dpi, facecolor=BACKGROUND,
                     metadata={"Software": None})

@@ -4,8 +4,6 @@ per database."""
 
 from __future__ import annotations
 
-import fcntl
-import os
 import secrets
 from pathlib import Path
 from urllib.parse import parse_qs
@@ -15,7 +13,8 @@ from starlette.datastructures import MutableHeaders
 from starlette.requests import cookie_parser
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from llm_grop.errors import BadInput
+from llm_grop import locking
+from llm_grop.web import GONE, TOO_LARGE, read_body, replaying
 
 #: The cookie a browser keeps the server's token in, after opening ``/?token=...`` once.
 TOKEN_COOKIE = "llm_grop_token"
@@ -91,37 +90,15 @@ class Guard:
             await error_response(415, "content-type: send the body as application/json"
                                  )(scope, receive, with_headers)
             return
-        length = headers.get(b"content-length")
-        too_big = error_response(413, f"request body larger than this server's "
-                                      f"{self.max_body} bytes")
-        if length is not None and (not length.isdigit() or int(length) > self.max_body):
-            await too_big(scope, receive, with_headers)
+        body = await read_body(receive, self.max_body, headers.get(b"content-length"))
+        if body is GONE:
             return
-        # The whole body is read here, up to the limit, so a chunked body that never ends
-        # costs no more memory than a declared one.
-        chunks, size, more = [], 0, True
-        while more:
-            message = await receive()
-            if message["type"] == "http.disconnect":
-                return
-            chunk = message.get("body", b"")
-            size += len(chunk)
-            if size > self.max_body:
-                await too_big(scope, receive, with_headers)
-                return
-            chunks.append(chunk)
-            more = message.get("more_body", False)
-        body = b"".join(chunks)
-        sent = False
-
-        async def replay() -> Message:
-            nonlocal sent
-            if not sent:
-                sent = True
-                return {"type": "http.request", "body": body, "more_body": False}
-            return await receive()
-
-        await self.app(scope, replay, with_headers)
+        if body is TOO_LARGE:
+            await error_response(413, f"request body larger than this server's "
+                                      f"{self.max_body} bytes")(scope, receive, with_headers)
+            return
+        assert isinstance(body, bytes)
+        await self.app(scope, replaying(body, receive), with_headers)
 
     def _allowed(self, scope: Scope, headers: dict[bytes, bytes]) -> bool:
         assert self.token is not None
@@ -165,16 +142,6 @@ def _host(headers: dict[bytes, bytes]) -> str:
 
 def hold_lock(db: Path) -> int:
     """Take the database's lock file, so that one server at a time owns its jobs; the file
-    descriptor that holds it. :class:`BadInput` naming the holder if another server has
-    it (the lock goes with its process, so a killed server's lock is free)."""
-    lock = db.with_name(db.name + ".lock")
-    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o600)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
-        os.close(fd)
-        raise BadInput(f"--db {db}: in use by another llm-grop serve (pid {holder})") from None
-    os.ftruncate(fd, 0)
-    os.write(fd, str(os.getpid()).encode())
-    return fd
+    descriptor that holds it (:mod:`llm_grop.locking`)."""
+    return locking.hold(db.with_name(db.name + ".lock"), f"--db {db}",
+                        "another llm-grop serve")

@@ -13,7 +13,6 @@ import math
 import re
 from functools import cache
 from typing import Annotated, Any
-from urllib.parse import urlsplit
 
 import jinja2
 from fastapi import FastAPI, Form, Request
@@ -31,6 +30,7 @@ from llm_grop.service.models import (
     one_line,
 )
 from llm_grop.service.service import Service, StillRunning
+from llm_grop.web import same_origin
 from llm_grop.world.contract import ArrangementDoc
 
 HISTORY_COOKIE = "llm_grop_history"
@@ -140,9 +140,7 @@ def add_playground(app: FastAPI, service: Service) -> None:
 
 def _check_origin(request: Request) -> None:
     """Refuse a form posted from another site, or with no Origin to tell."""
-    origin = request.headers.get("origin")
-    host = request.headers.get("host", "")
-    if origin is None or origin == "null" or urlsplit(origin).netloc != host:
+    if not same_origin(request.headers.get("origin"), request.headers.get("host")):
         raise Refused(403, "form posted from another site (or without an Origin header)")
 
 

@@ -1,0 +1,40 @@
+"""One writer at a time: an exclusive lock on a file beside what is written (a results
+directory, a service's database), held by an open file descriptor for as long as the
+writer runs.
+
+The kernel releases the lock when its process ends however it ends, so a lock left by a
+killed process is simply taken by the next writer. The file holds the holder's process id,
+which a refused writer names.
+
+This module imports nothing from the package but its errors, so every layer may use it.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+from pathlib import Path
+
+from llm_grop.errors import BadInput
+
+
+def hold(lock: Path, where: str, holder: str) -> int:
+    """Take the exclusive lock on the file ``lock`` (made if missing); the file descriptor
+    that holds it, for :func:`release`. :class:`BadInput` naming ``where`` and the
+    holder's process id if another process (``holder``: what it is, in words) has it."""
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        pid = os.read(fd, 32).decode(errors="replace").strip() or "?"
+        os.close(fd)
+        raise BadInput(f"{where}: in use by {holder} (pid {pid}); wait for it to end or "
+                       "stop it") from None
+    os.ftruncate(fd, 0)
+    os.write(fd, str(os.getpid()).encode())
+    return fd
+
+
+def release(fd: int) -> None:
+    """Let go of a lock from :func:`hold`."""
+    os.close(fd)
