@@ -2,7 +2,7 @@
 
 import sys
 
-from llm_grop.cli import main
+from llm_grop.entry import main
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -151,11 +151,12 @@ def bench(quiet: bool, **params: Any) -> None:
     t0 = time.perf_counter()
     with TrialProgress(console, quiet, out_dir) as progress:
         outcome = run_experiment(exp, out_dir, executor=executor, on_start=progress.start,
-                                 on_row=progress.row)
+                                 on_row=progress.row, max_failed=params["max_failed"])
     wall = time.perf_counter() - t0
     if outcome.interrupted:
         console.print(f"interrupted: {len(outcome.rows)} finished trial(s) are saved in "
-                      f"{out_dir / 'trials.jsonl'}; rerun the same command to resume")
+                      f"{out_dir / 'trials.jsonl'}; rerun the same command to resume",
+                      soft_wrap=True)
         raise click.exceptions.Exit(130)
     report = write_reports(out_dir, outcome.rows, exp.seed)
     if not quiet:

@@ -349,6 +349,10 @@ _EXECUTION_OPTIONS = [
                       "~/.cache/llm-grop/llm-calls]."),
     click.option("--no-cache", is_flag=True,
                  help="Ask the LLM every call, without the shared answer cache."),
+    click.option("--max-failed", type=click.IntRange(1),
+                 help="Stop once this many trials got no LLM answer after their retries "
+                      "(the server is down) [default: never; such trials are recorded "
+                      "llm-failed, and a rerun retries them]."),
 ]
 
 

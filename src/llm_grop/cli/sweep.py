@@ -127,12 +127,12 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
     with TrialProgress(console, quiet, out_dir,
                        label=lambda k: plan.cells[k].name) as progress:
         outcomes = run_cells(cells, executor, on_start=progress.start, on_row=progress.row,
-                             keep_rows=False)
+                             keep_rows=False, max_failed=flags["max_failed"])
     wall = time.perf_counter() - t0
     if any(o.interrupted for o in outcomes):
         saved = sum(o.ran + o.skipped for o in outcomes)
         console.print(f"interrupted: {saved} finished trial(s) are saved in {out_dir}; "
-                      "rerun the same command to resume")
+                      "rerun the same command to resume", soft_wrap=True)
         raise click.exceptions.Exit(130)
     reports = write_sweep_reports(out_dir, plan, [c.experiment.seed for c in cells])
     if not quiet:

@@ -30,6 +30,7 @@ from typing import Any, Protocol, runtime_checkable
 from llm_grop import plugins
 from llm_grop.experiment.worker import Done, Job, Runners, run_job
 from llm_grop.plugins import Registry
+from llm_grop.processes import ctrl_c_ignored_by_children, die_with_parent
 
 log = logging.getLogger(__name__)
 
@@ -79,8 +80,10 @@ def _init_worker(registered: Registered, log_level: int) -> None:
     logging.basicConfig(format="llm-grop: worker %(process)d: %(levelname)s: %(name)s: "
                         "%(message)s")
     logging.getLogger("llm_grop").setLevel(log_level)
-    # The driver handles Ctrl-C and stops the workers; they must not die mid-row.
+    # The driver handles Ctrl-C and stops the workers; they must not die mid-row, nor
+    # outlive a driver that was killed.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent()
     try:
         plugins.restore(registered)
     except Exception as exc:  # noqa: BLE001 - handed to the driver with the first job
@@ -113,8 +116,9 @@ class LocalExecutor:
                 yield run_job(job, runners)
             return
         ctx = multiprocessing.get_context("spawn")
-        pool = ctx.Pool(min(self.workers, len(jobs)), initializer=_init_worker,
-                        initargs=(registered, log.getEffectiveLevel()))
+        with ctrl_c_ignored_by_children():
+            pool = ctx.Pool(min(self.workers, len(jobs)), initializer=_init_worker,
+                            initargs=(registered, log.getEffectiveLevel()))
         try:
             yield from pool.imap_unordered(_work, jobs, chunksize=1)
             pool.close()

@@ -3,9 +3,10 @@
 Needs the ``ray`` extra (``pip install 'llm-grop[ray]'``). Without ``--ray-address`` (and
 without ``$RAY_ADDRESS``) it starts a Ray cluster on this machine with ``--workers`` CPUs
 (every CPU by default) and stops it at the end; with one it joins that cluster and leaves
-it running. Every node must have llm-grop installed, with the same version and plugins as
-the driver, and must reach the files the experiment names (a scene, a replay recording,
-catalogs, tasks) at the same paths.
+it running; a watchdog process (:mod:`.ray_watchdog`) stops the cluster it started should
+this process be killed. Every node must have llm-grop installed, with the same version and
+plugins as the driver, and must reach the files the experiment names (a scene, a replay
+recording, catalogs, tasks) at the same paths.
 
 * **Tasks.** A task runs a batch of up to :data:`MAX_BATCH` trials one after another and
   streams each one's result back as it ends (a Ray streaming generator), so a worker waits
@@ -20,6 +21,9 @@ catalogs, tasks) at the same paths.
   into the results directory: the nodes need no shared file system.
 * **Results.** The driver alone appends to ``trials.jsonl``. On Ctrl-C or an error it
   cancels the tasks still in flight; a rerun resumes as after a local run.
+* **Lost nodes.** A batch whose worker process or node dies is run again on the nodes
+  left, up to :data:`TASK_RETRIES` times; the trials already streamed back are not
+  repeated, so every row is written once. An error in a trial itself is not retried.
 * **The LLM cache** is a directory on each node (``--cache-dir``); nodes that share it over
   a network file system share answers too.
 """
@@ -28,7 +32,10 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import socket
+import subprocess
+import sys
 from collections import deque
 from collections.abc import Iterator, Sequence
 from typing import Any
@@ -40,6 +47,8 @@ from llm_grop.experiment.worker import Done, Job, Runners, run_job
 
 log = logging.getLogger(__name__)
 
+#: Times a batch lost to a dead worker or node is run again before the bench stops.
+TASK_RETRIES = 3
 #: Batches in flight per task slot, so a worker never waits for the driver to hand it work.
 _IN_FLIGHT_PER_SLOT = 2
 #: Trials one task runs at most, one after another, streaming each one's result back as it
@@ -75,6 +84,7 @@ class RayExecutor:
         self._ray = ray
         self.options = options
         self.workers = options.workers
+        self._watchdog: subprocess.Popen[bytes] | None = None
 
     def run(self, jobs: Sequence[Job], registered: Registered) -> Iterator[Done]:
         """Every job's :class:`Done`, in the order they finish."""
@@ -84,7 +94,11 @@ class RayExecutor:
         started = self._connect()
         streams: dict[Any, deque[Job]] = {}
         try:
-            remote = ray.remote(num_cpus=self.options.cpus_per_trial, max_retries=0,
+            # A batch lost with its worker or node is run again elsewhere (trials are
+            # deterministic, and only this driver writes, so each row still comes once);
+            # a trial's own error is not retried.
+            remote = ray.remote(num_cpus=self.options.cpus_per_trial,
+                                max_retries=TASK_RETRIES, retry_exceptions=False,
                                 num_returns="streaming")(_trials)
             # --workers caps the batches, so the trials, running at once; without it the
             # cluster's slots are kept busy, with a batch queued behind each.
@@ -129,6 +143,10 @@ class RayExecutor:
                 ray.cancel(stream, force=True)
             if started:
                 ray.shutdown()
+                if self._watchdog is not None:
+                    self._watchdog.kill()
+                    self._watchdog.wait()
+                    self._watchdog = None
 
     def _connect(self) -> bool:
         """Join or start a cluster; ``True`` when this call started it (and must stop it)."""
@@ -144,12 +162,18 @@ class RayExecutor:
         try:
             if address is not None:
                 _check_reachable(address)
+                _check_joinable(address)
                 ray.init(address=address, **kwargs)
             else:
                 workers = self.options.workers
                 cpus = None if workers is None else math.ceil(
                     workers * self.options.cpus_per_trial)
                 ray.init(num_cpus=cpus, **kwargs)
+                # Should this process be killed, nothing it started must outlive it.
+                self._watchdog = subprocess.Popen(
+                    [sys.executable, "-m", "llm_grop.experiment.ray_watchdog",
+                     str(os.getpid())], start_new_session=True, stdin=subprocess.DEVNULL,
+                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         except (ConnectionError, RuntimeError, ValueError) as exc:
             where = f"the Ray cluster at {address}" if address else "a local Ray cluster"
             raise BadInput(f"--executor ray: cannot reach {where}: "
@@ -194,6 +218,26 @@ def _line(exc: BaseException) -> str:
 
 #: Seconds to wait for a Ray cluster's port before calling it unreachable.
 _PROBE_S = 5.0
+#: Seconds a trial join of a Ray cluster may take before it is called unjoinable.
+JOIN_S = 60.0
+_JOIN = ("import sys, ray; ray.init(address=sys.argv[1], include_dashboard=False, "
+         "log_to_driver=False, configure_logging=False); ray.shutdown()")
+
+
+def _check_joinable(address: str) -> None:
+    """:class:`ConnectionError` unless a throwaway process joins the cluster at
+    ``address`` within :data:`JOIN_S` seconds: a port that answers is not yet a cluster
+    this machine can join (one bound to another host's loopback accepts the connection,
+    and Ray then waits for minutes)."""
+    try:
+        probe = subprocess.run([sys.executable, "-c", _JOIN, address], capture_output=True,
+                               text=True, timeout=JOIN_S)
+    except subprocess.TimeoutExpired:
+        raise ConnectionError(f"could not join it within {JOIN_S:g} s (is the cluster's "
+                              "node address reachable from here?)") from None
+    if probe.returncode != 0:
+        lines = [line for line in probe.stderr.strip().splitlines() if line.strip()]
+        raise ConnectionError(lines[-1] if lines else f"exit status {probe.returncode}")
 
 
 def _check_reachable(address: str) -> None:

@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from llm_grop import locking, plugins
-from llm_grop.errors import BadInput
+from llm_grop.errors import BadInput, LLMUnavailable
 from llm_grop.execution.policy import NAV_ATTEMPTS
 from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
 from llm_grop.experiment.paired import PairedComparison, paired_by_trial
@@ -213,7 +213,8 @@ class Cell:
 def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
                    executor: Executor | None = None,
                    on_start: Callable[[int, int], None] | None = None,
-                   on_row: Callable[[TrialRow], None] | None = None) -> Outcome:
+                   on_row: Callable[[TrialRow], None] | None = None,
+                   max_failed: int | None = None) -> Outcome:
     """Run the trials of ``exp`` not yet in ``out``; returns every row there.
 
     Trials run on ``executor`` (default: ``workers`` local processes).
@@ -221,14 +222,15 @@ def run_experiment(exp: Experiment, out: Path, *, workers: int = 1,
     """
     executor = executor or LocalExecutor(ExecutorOptions(workers=workers))
     (outcome,) = run_cells([Cell(exp, out)], executor, on_start=on_start,
-                           on_row=None if on_row is None else lambda _, row: on_row(row))
+                           on_row=None if on_row is None else lambda _, row: on_row(row),
+                           max_failed=max_failed)
     return outcome
 
 
 def run_cells(cells: Sequence[Cell], executor: Executor, *,
               on_start: Callable[[int, int], None] | None = None,
               on_row: Callable[[int, TrialRow], None] | None = None,
-              keep_rows: bool = True) -> tuple[Outcome, ...]:
+              keep_rows: bool = True, max_failed: int | None = None) -> tuple[Outcome, ...]:
     """Run every cell's trials not yet in its directory, all through one ``executor``, and
     return each cell's :class:`Outcome` (in ``cells``' order).
 
@@ -239,6 +241,11 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
     ``on_row(cell index, row)`` after each finished trial. Ctrl-C stops the executor and
     keeps every finished trial. Without ``keep_rows`` the outcomes hold no rows (read
     each cell's with :func:`read_rows`).
+
+    A trial whose LLM failed (``status`` ``llm-failed``) counts as not done: a rerun runs
+    it again and its new row replaces the old. With ``max_failed``, the run stops once
+    that many trials of this run failed so: :class:`~llm_grop.errors.LLMUnavailable`,
+    every finished trial kept.
     """
     used: dict[str, list[str]] = {BACKENDS.group: [], SIMULATORS.group: [], METHODS.group: []}
     for cell in cells:
@@ -255,7 +262,8 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
         for cell in cells:
             held.append(locking.hold(cell.out / LOCK, f"--out {cell.out}",
                                      "another llm-grop run on this directory"))
-        return _run_locked(cells, executor, registered, on_start, on_row, keep_rows)
+        return _run_locked(cells, executor, registered, on_start, on_row, keep_rows,
+                           max_failed)
     finally:
         for fd in held:
             locking.release(fd)
@@ -264,14 +272,15 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
 def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
                 on_start: Callable[[int, int], None] | None,
                 on_row: Callable[[int, TrialRow], None] | None,
-                keep_rows: bool) -> tuple[Outcome, ...]:
+                keep_rows: bool, max_failed: int | None) -> tuple[Outcome, ...]:
     """:func:`run_cells` once every directory is checked and locked."""
     jobs: list[Job] = []
     skipped: list[int] = []
     for index, cell in enumerate(cells):
         if cell.experiment.settings.images is not None:
             Path(cell.experiment.settings.images).mkdir(parents=True, exist_ok=True)
-        mine = read_rows(cell.out)
+        # Trials whose LLM failed are run again; their rows go, and the new ones come.
+        mine = [r for r in read_rows(cell.out) if r.status != "llm-failed"]
         done = {_key(r) for r in mine}
         wanted = cell.experiment.specs()
         pending = [Job(index, cell.experiment.settings, s) for s in wanted if s.key not in done]
@@ -282,6 +291,7 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
     if on_start is not None:
         on_start(len(jobs), sum(skipped))
     ran = [0] * len(cells)
+    failed: list[TrialRow] = []
     interrupted = False
     results = executor.run(jobs, registered)
     try:
@@ -298,6 +308,13 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
                      row.rating, "success" if row.success else row.status)
             if on_row is not None:
                 on_row(finished.cell, row)
+            if row.status == "llm-failed":
+                failed.append(row)
+                if max_failed is not None and len(failed) >= max_failed:
+                    raise LLMUnavailable(
+                        f"--max-failed {max_failed}: {len(failed)} trials got no LLM answer "
+                        f"(the last: {row.reason}); stopped early, every finished trial "
+                        "is saved; rerun to retry them")
     except KeyboardInterrupt:
         interrupted = True
     finally:
@@ -351,7 +368,9 @@ def write_reports(out: Path, rows: Sequence[TrialRow], seed: int = 0) -> Report:
     """Write the summary, with the methods' paired comparisons (their bootstrap drawn from
     ``seed``, the bench's), and the paper's two plots from ``rows``."""
     summary = summarize(rows)
-    paired = paired_by_trial(rows, summary.method_names, seed)
+    # Trials whose LLM failed say nothing of the methods: they are counted apart.
+    counted = [r for r in rows if r.status != "llm-failed"]
+    paired = paired_by_trial(counted, summary.method_names, seed)
     write_json(out / "summary.json", summary_to_dict(summary, paired))
     (out / "summary.md").write_text(summary_markdown(summary, paired=paired),
                                     encoding="utf-8")

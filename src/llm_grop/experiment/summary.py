@@ -93,6 +93,8 @@ class Summary:
 
     methods: tuple[MethodSummary, ...]
     per_task: tuple[TaskSummary, ...]
+    #: Trials whose LLM failed after its retries, per method: left out of every figure.
+    llm_failed: tuple[tuple[str, int], ...] = ()
 
     @property
     def method_names(self) -> tuple[str, ...]:
@@ -149,7 +151,13 @@ class Outcome(Protocol):
 
 
 def summarize_outcomes(parsed: Sequence[Outcome]) -> Summary:
-    """:func:`summarize` of trials already read."""
+    """:func:`summarize` of trials already read; trials whose LLM failed (``status``
+    ``llm-failed``) are counted apart and left out of every statistic."""
+    failed: dict[str, int] = {}
+    for r in parsed:
+        if getattr(r, "status", "ok") == "llm-failed":
+            failed[r.method] = failed.get(r.method, 0) + 1
+    parsed = [r for r in parsed if getattr(r, "status", "ok") != "llm-failed"]
     seen: dict[str, None] = {}
     for r in parsed:
         seen.setdefault(r.method, None)
@@ -169,7 +177,7 @@ def summarize_outcomes(parsed: Sequence[Outcome]) -> Summary:
             on_task = [r for r in mine if r.task == task]
             per_task.append(TaskSummary(name, task, stat(r.rating for r in on_task),
                                         stat(r.execution_time_s for r in on_task)))
-    return Summary(tuple(methods), tuple(per_task))
+    return Summary(tuple(methods), tuple(per_task), tuple(failed.items()))
 
 
 def _stat_dict(s: Stat) -> dict[str, float | int | None]:
@@ -196,6 +204,7 @@ def summary_to_dict(summary: Summary, paired: Paired | None = None) -> dict[str,
                      "planning_time_s": _stat_dict(m.planning_time_s),
                      "success_rate": _stat_dict(m.success_rate)} for m in summary.methods],
         "tasks": list(summary.tasks),
+        **({"llm_failed": dict(summary.llm_failed)} if summary.llm_failed else {}),
         "per_task": [{"method": t.method, "task": t.task, "rating": _stat_dict(t.rating),
                       "execution_time_s": _stat_dict(t.execution_time_s)}
                      for t in summary.per_task],
@@ -273,6 +282,11 @@ def summary_markdown(summary: Summary, *, with_se: bool = False,
         lines += ["", f"{PAIRED_TITLE}:", "", md_row(headers),
                   "| --- | --- | --- |" + " ---: |" * (len(headers) - 3)]
         lines += [md_row(r) for r in rows]
+    if summary.llm_failed:
+        n = sum(k for _, k in summary.llm_failed)
+        each = ", ".join(f"{m} {k}" for m, k in summary.llm_failed)
+        lines += ["", f"Left out: {n} trial(s) whose LLM failed after its retries ({each}); "
+                      "rerun the same command to retry them."]
     return "\n".join(lines) + "\n"
 
 
@@ -328,3 +342,7 @@ def print_summary(summary: Summary, console: Console, *, with_se: bool = False,
     console.print(rich_table(_task_title(with_se), task_headers, task_rows, left=0))
     if paired:
         console.print(rich_table(PAIRED_TITLE, *paired_table(paired), left=3))
+    if summary.llm_failed:
+        n = sum(k for _, k in summary.llm_failed)
+        console.print(f"[yellow]{n} trial(s) got no LLM answer after their retries and are "
+                      "left out; rerun the same command to retry them[/yellow]")

@@ -5,7 +5,8 @@ with the automatic rater, draws the final table as the paper's raters saw it, an
 one :class:`~llm_grop.world.contract.TrialRow`: the contract's run JSON (without the LLM's
 call log) plus the rating, its checks and per-trial counts. A trial whose arrangement or
 plan is infeasible still gives a row (``status`` ``"infeasible"``, nothing on the table,
-rated accordingly).
+rated accordingly), and so does one whose LLM could not answer after its retries
+(``"llm-failed"``, with the reason), which the summary leaves out and a rerun retries.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any
 from llm_grop.api import run
 from llm_grop.arrangement.diners import seat_items
 from llm_grop.arrangement.pipeline import ArrangeOptions
-from llm_grop.errors import Infeasible
+from llm_grop.errors import Infeasible, LLMUnavailable
 from llm_grop.evaluation.rater import rate
 from llm_grop.execution import ExecutionPolicy
 from llm_grop.execution.policy import NAV_ATTEMPTS
@@ -145,16 +146,19 @@ class TrialRunner:
                          execution=ExecutionPolicy(
                              nav_attempts=self.settings.nav_attempts,
                              manip_attempts=self.settings.manip_attempts))
-        except Infeasible as exc:
-            log.info("task %d trial %d %s: infeasible: %s", spec.task, spec.trial,
-                     spec.method, exc)
+        except (Infeasible, LLMUnavailable) as exc:
+            # A trial whose LLM failed after its retries is kept as such, and the bench
+            # goes on; a rerun asks again (a replay file without the answer still stops).
+            status = "infeasible" if isinstance(exc, Infeasible) else "llm-failed"
+            log.info("task %d trial %d %s: %s: %s", spec.task, spec.trial, spec.method,
+                     status, exc)
             final = Arrangement(task.request, self.scene.target_top, ())
             items = list(requested)
             episode = {"method": spec.method, "task": spec.task, "seed": spec.seed,
                        "request": task.request, "success": False, "execution_time_s": None,
                        "planning_time_s": None, "failures": 0, "unplaced": items,
                        "steps": [], "final": arrangement_doc(final),
-                       "simulator": self.settings.simulator, "status": "infeasible",
+                       "simulator": self.settings.simulator, "status": status,
                        "reason": str(exc), "retries": 0}
         else:
             final = result.final

@@ -10,18 +10,16 @@ jobs where that is not available.
 
 from __future__ import annotations
 
-import contextlib
-import ctypes
 import logging
 import multiprocessing
 import os
 import signal
-import sys
 import threading
 import time
 from multiprocessing.process import BaseProcess
 
 from llm_grop.errors import Infeasible, LLMError, LLMGropError
+from llm_grop.processes import ctrl_c_ignored_by_children, die_with_parent
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.jobs import Job, JobStore
 
@@ -31,7 +29,6 @@ log = logging.getLogger(__name__)
 IDLE_POLL_S = 0.05
 #: Seconds between the supervisor's rounds.
 SUPERVISE_S = 0.25
-_PR_SET_PDEATHSIG = 1
 
 
 def status_of(exc: BaseException) -> tuple[int, str]:
@@ -50,18 +47,11 @@ def status_of(exc: BaseException) -> tuple[int, str]:
     return 500, f"internal error: {type(exc).__name__} (the server's log has the details)"
 
 
-def _die_with_parent() -> None:
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError, AttributeError):
-            libc = ctypes.CDLL("libc.so.6", use_errno=True)
-            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-
-
 def worker_main(config: ServiceConfig, parent: int) -> None:
     """A worker's life: claim, run, record, until its parent goes."""
     from llm_grop.service.tasks import Backends, perform
 
-    _die_with_parent()
+    die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server stops its workers itself
     os.environ.setdefault("MUJOCO_GL", "osmesa")
     store = JobStore(config.db)
@@ -135,7 +125,8 @@ class WorkerPool:
     def _spawn(self) -> BaseProcess:
         p = self._ctx.Process(target=worker_main, args=(self.config, os.getpid()),
                               name="llm-grop-worker", daemon=True)
-        p.start()
+        with ctrl_c_ignored_by_children():
+            p.start()
         return p
 
     def _supervise(self) -> None:

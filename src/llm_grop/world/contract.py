@@ -320,8 +320,9 @@ class RatingDoc(Doc):
 
 class TrialRow(RunDoc):
     """One line of a bench's ``trials.jsonl``: the run JSON of one trial (without the LLM
-    call log) plus its rating. A trial without a plan has ``status`` ``infeasible``, a
-    ``reason``, nothing on the table, and no ``plan``, ``planned`` or ``scene``."""
+    call log) plus its rating. A trial without a plan has ``status`` ``infeasible`` (or
+    ``llm-failed``), a ``reason``, nothing on the table, and no ``plan``, ``planned`` or
+    ``scene``."""
 
     model_config = ConfigDict(title="llm-grop bench trial row")
 
@@ -334,7 +335,10 @@ class TrialRow(RunDoc):
     scene: SceneFile | None = None
     simulator: Name | None = Field(None, description="the simulator that executed the plan; "
                                                      "absent in rows written before 0.2")
-    status: Literal["ok", "infeasible"]
+    status: Literal["ok", "infeasible", "llm-failed"] = Field(
+        description="ok; infeasible: no plan exists; llm-failed: the LLM could not be "
+                    "reached or answered badly after its retries (left out of the summary's "
+                    "means, and retried by a rerun; since 0.13)")
     reason: Text | None = None
     trial: Int
     retries: Int = Field(description="actions that needed more than one attempt")

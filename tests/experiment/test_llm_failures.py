@@ -1,0 +1,62 @@
+"""A bench that keeps going when the LLM fails: such trials are recorded ``llm-failed``,
+left out of the summary, and retried by a rerun; ``--max-failed`` stops a bench whose
+server is down."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from llm_grop.cli import main
+from scripted import TASK1_GOOD, scripted
+
+
+def _bench(server, out: Path, *extra: str) -> int:
+    return main(["bench", "--tasks", "1", "--trials", "4", "--methods", "latp,llm-grop",
+                 "--llm", "openai", "--base-url", server.url, "--retries", "0",
+                 "--no-cache", "--no-images", "--out", str(out), "-q", *extra])
+
+
+def _rows(out: Path) -> list[dict]:
+    return [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
+
+
+def test_failed_trials_are_kept_apart_and_retried_by_a_rerun(chat_server,
+                                                             tmp_path: Path) -> None:
+    chat_server.reply = scripted([TASK1_GOOD])
+    chat_server.plan.extend(([200, 200, 500] * 200)[:300])  # a third of the calls fail
+    out = tmp_path / "bench"
+    assert _bench(chat_server, out) == 0
+    first = _rows(out)
+    failed = [r for r in first if r["status"] == "llm-failed"]
+    assert len(first) == 8 and failed, "some trials should have failed"
+    assert all("answered 500" in r["reason"] for r in failed)
+    summary = json.loads((out / "summary.json").read_text())
+    assert sum(summary["llm_failed"].values()) == len(failed)
+    assert sum(m["trials"] for m in summary["methods"]) == 8 - len(failed)
+    assert "Left out:" in (out / "summary.md").read_text()
+
+    chat_server.plan.clear()
+    asked = len(chat_server.requests)
+    assert _bench(chat_server, out) == 0
+    again = _rows(out)
+    assert len(again) == 8 and all(r["status"] == "ok" for r in again)
+    kept = {(r["method"], r["trial"]): r for r in again}
+    for r in first:
+        if r["status"] == "ok":  # a trial that succeeded was not run again
+            assert kept[(r["method"], r["trial"])]["llm_calls"] == r["llm_calls"]
+    assert len(chat_server.requests) > asked
+    assert "llm_failed" not in json.loads((out / "summary.json").read_text())
+
+
+def test_max_failed_stops_a_bench_whose_server_is_down(chat_server, tmp_path: Path,
+                                                       capsys) -> None:
+    chat_server.plan.extend([503] * 1000)
+    out = tmp_path / "down"
+    assert _bench(chat_server, out, "--max-failed", "2") == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("llm-grop: error: --max-failed 2: 2 trials got no LLM answer")
+    assert err.endswith("stopped early, every finished trial is saved; rerun to retry them")
+    assert "\n" not in err
+    rows = _rows(out)
+    assert 2 <= len(rows) < 8 and all(r["status"] == "llm-failed" for r in rows)
