@@ -40,6 +40,12 @@ class LLMUnavailable(LLMError):
     """The LLM endpoint or model could not be reached or loaded."""
 
 
+class LLMTransient(LLMUnavailable):
+    """The LLM did not answer this time (unreachable, over the deadline, busy, failing
+    with 5xx, or a garbled answer) where asking again later may succeed; a wrong key,
+    model or configuration is :class:`LLMUnavailable` and stays so."""
+
+
 class ReplayMissing(LLMError):
     """A replay file holds no response for a prompt."""
 

@@ -214,3 +214,27 @@ def test_a_huge_answer_is_refused_as_it_arrives(chat_server: ChatServer) -> None
     llm = OpenAILLM(BackendOptions(base_url=chat_server.url, max_answer_bytes=1024 * 1024))
     with pytest.raises(LLMUnavailable, match=r"is larger than 1048576 bytes; refused"):
         llm.complete("hi", PARAMS)
+
+
+def test_a_retry_after_that_is_no_number_or_date_falls_back_to_backoff(
+        chat_server: ChatServer) -> None:
+    chat_server.plan.extend([429])
+    chat_server.retry_after = "soon"
+    record = make(chat_server, max_retries=1, timeout_s=10).complete("hi", PARAMS)
+    assert record.response and len(chat_server.requests) == 2
+
+
+def test_passing_failures_are_transient_and_lasting_ones_are_not(chat_server: ChatServer,
+                                                                 closed_port: int) -> None:
+    from llm_grop.errors import LLMTransient
+
+    chat_server.plan.extend([500])
+    with pytest.raises(LLMTransient, match="answered 500"):
+        make(chat_server, max_retries=0).complete("hi", PARAMS)
+    with pytest.raises(LLMTransient, match="connection refused"):
+        OpenAILLM(BackendOptions(base_url=f"http://127.0.0.1:{closed_port}/v1",
+                                 max_retries=0)).complete("hi", PARAMS)
+    chat_server.api_key = "right"
+    with pytest.raises(LLMUnavailable) as info:
+        make(chat_server, max_retries=0, api_key="wrong").complete("hi", PARAMS)
+    assert not isinstance(info.value, LLMTransient)

@@ -278,7 +278,7 @@ def test_join_attempts_are_limited_per_address(client: TestClient, study) -> Non
     for _ in range(JOINS_PER_MINUTE):
         refused(client.post("/api/session", json={"code": "WRONG-CODE"}), 401, "unknown")
     r = client.post("/api/session", json={"code": study[1][0]})
-    refused(r, 429, "too many join attempts from this address")
+    refused(r, 429, "too many failed join attempts from this address")
     assert 1 <= int(r.headers["retry-after"]) <= 60
     r = client.post("/join", data={"code": study[1][0]}, headers=SAME, follow_redirects=False)
     assert r.status_code == 429 and r.headers["retry-after"].isdigit()

@@ -22,8 +22,10 @@ recording, catalogs, tasks) at the same paths.
 * **Results.** The driver alone appends to ``trials.jsonl``. On Ctrl-C or an error it
   cancels the tasks still in flight; a rerun resumes as after a local run.
 * **Lost nodes.** A batch whose worker process or node dies is run again on the nodes
-  left, up to :data:`TASK_RETRIES` times; the trials already streamed back are not
-  repeated, so every row is written once. An error in a trial itself is not retried.
+  left, up to :data:`TASK_RETRIES` times. Ray replays the whole batch and drops the
+  results the driver already has, so the trials it had streamed back run again (the LLM
+  cache answers their calls) but every row is written once. An error in a trial itself
+  is not retried.
 * **The LLM cache** is a directory on each node (``--cache-dir``); nodes that share it over
   a network file system share answers too.
 """
@@ -142,11 +144,13 @@ class RayExecutor:
             for stream in streams:
                 ray.cancel(stream, force=True)
             if started:
-                ray.shutdown()
-                if self._watchdog is not None:
-                    self._watchdog.kill()
-                    self._watchdog.wait()
-                    self._watchdog = None
+                try:
+                    ray.shutdown()
+                finally:
+                    if self._watchdog is not None:
+                        self._watchdog.kill()
+                        self._watchdog.wait()
+                        self._watchdog = None
 
     def _connect(self) -> bool:
         """Join or start a cluster; ``True`` when this call started it (and must stop it)."""

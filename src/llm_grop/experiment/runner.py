@@ -163,8 +163,9 @@ def prepare_dir(out: Path, exp: Experiment) -> None:
 
 
 def read_rows(out: Path) -> list[TrialRow]:
-    """The finished trials' rows, each ``(method, task, trial)`` once (the first written);
-    a last line cut off by a crash is dropped."""
+    """The finished trials' rows, each ``(method, task, trial)`` once (the first written,
+    unless only a later one has an LLM answer); a last line cut off by a crash is
+    dropped."""
     path = out / ROWS
     if not path.exists():
         return []
@@ -180,7 +181,9 @@ def read_rows(out: Path) -> list[TrialRow]:
         rows.append(read_doc(TrialRow, data, f"{path} line {i + 1}"))
     first: dict[tuple[str, int, int], TrialRow] = {}
     for row in rows:
-        first.setdefault(_key(row), row)
+        kept = first.get(_key(row))
+        if kept is None or kept.status == "llm-failed" and row.status != "llm-failed":
+            first[_key(row)] = row
     if len(first) < len(rows):
         # Two runs wrote here before runs took the directory's lock; the first row of a
         # trial is kept, and the next resume rewrites the file without the others.

@@ -19,7 +19,7 @@ from typing import Any
 from llm_grop.api import run
 from llm_grop.arrangement.diners import seat_items
 from llm_grop.arrangement.pipeline import ArrangeOptions
-from llm_grop.errors import Infeasible, LLMUnavailable
+from llm_grop.errors import Infeasible, LLMTransient
 from llm_grop.evaluation.rater import rate
 from llm_grop.execution import ExecutionPolicy
 from llm_grop.execution.policy import NAV_ATTEMPTS
@@ -146,9 +146,10 @@ class TrialRunner:
                          execution=ExecutionPolicy(
                              nav_attempts=self.settings.nav_attempts,
                              manip_attempts=self.settings.manip_attempts))
-        except (Infeasible, LLMUnavailable) as exc:
-            # A trial whose LLM failed after its retries is kept as such, and the bench
-            # goes on; a rerun asks again (a replay file without the answer still stops).
+        except (Infeasible, LLMTransient) as exc:
+            # A trial whose LLM did not answer after its retries is kept as such, and the
+            # bench goes on; a rerun asks again. A wrong key, model or replay file is no
+            # passing failure: it stops the bench.
             status = "infeasible" if isinstance(exc, Infeasible) else "llm-failed"
             log.info("task %d trial %d %s: %s: %s", spec.task, spec.trial, spec.method,
                      status, exc)

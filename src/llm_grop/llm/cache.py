@@ -127,6 +127,7 @@ class LLMCache:
             path.parent.mkdir(parents=True, exist_ok=True)
             tmp.write_text(json.dumps(data, ensure_ascii=False), encoding="utf-8")
             os.replace(tmp, path)
-        except OSError as exc:
-            log.warning("LLM cache: cannot write %s (%s)", path, exc.strerror or exc)
+        except (OSError, ValueError) as exc:  # ValueError: text UTF-8 cannot hold
+            log.warning("LLM cache: cannot write %s (%s)", path,
+                        getattr(exc, "strerror", None) or exc)
             tmp.unlink(missing_ok=True)

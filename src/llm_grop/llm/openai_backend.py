@@ -27,8 +27,10 @@ llama.cpp server) through the official ``openai`` SDK.
 
 from __future__ import annotations
 
+import datetime
 import email.utils
 import json
+import math
 import os
 import random
 import re
@@ -36,9 +38,10 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
+import httpx
 import openai
 
-from llm_grop.errors import LLMUnavailable
+from llm_grop.errors import LLMTransient, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, SamplingParams
 from llm_grop.llm.record import LLMCallRecord
 
@@ -122,11 +125,14 @@ class OpenAILLM:
                 response = self._retried(kwargs, deadline)
             except openai.OpenAIError as exc:
                 raise self._unavailable(exc) from None
+            except (ValueError, RecursionError) as exc:
+                raise LLMTransient(f"openai backend: unreadable answer from {self.base_url}: "
+                                   f"{_one_line(exc)}") from None
         except openai.OpenAIError as exc:
             raise self._unavailable(exc) from None
-        except ValueError as exc:
+        except (ValueError, RecursionError) as exc:
             # A 200 answer whose body is not JSON.
-            raise LLMUnavailable(f"openai backend: unreadable answer from {self.base_url}: "
+            raise LLMTransient(f"openai backend: unreadable answer from {self.base_url}: "
                                  f"{_one_line(exc)}") from None
         else:
             if "response_format" in kwargs:
@@ -172,13 +178,21 @@ class OpenAILLM:
         with self._client.chat.completions.with_streaming_response.create(
                 **kwargs, timeout=remaining) as raw:
             chunks, size = [], 0
-            for chunk in raw.iter_bytes():
-                size += len(chunk)
-                if size > self._max_bytes:
-                    raise _TooLarge(size)
-                if time.monotonic() > deadline:
-                    raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
-                chunks.append(chunk)
+            try:
+                for chunk in raw.iter_bytes():
+                    size += len(chunk)
+                    if size > self._max_bytes:
+                        raise _TooLarge(size)
+                    if time.monotonic() > deadline:
+                        raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
+                    chunks.append(chunk)
+            except httpx.TimeoutException:
+                raise openai.APITimeoutError(request=None) from None  # type: ignore[arg-type]
+            except httpx.HTTPError as exc:
+                # The connection broke in the middle of the answer: as if it never came.
+                raise openai.APIConnectionError(
+                    message=_one_line(exc),
+                    request=httpx.Request("POST", self.base_url)) from None
         return json.loads(b"".join(chunks))
 
     def _wait(self, exc: Exception, attempt: int) -> float:
@@ -186,14 +200,9 @@ class OpenAILLM:
         response = getattr(exc, "response", None)
         headers = getattr(response, "headers", None) or {}
         for name, scale in (("retry-after-ms", 0.001), ("retry-after", 1.0)):
-            value = headers.get(name)
-            if value is not None:
-                try:
-                    return max(float(value) * scale, 0.0)
-                except ValueError:
-                    when = email.utils.parsedate_to_datetime(value) if value else None
-                    if when is not None:
-                        return max(when.timestamp() - time.time(), 0.0)
+            wait = _seconds(headers.get(name), scale)
+            if wait is not None:
+                return wait
         return min(0.5 * 2 ** attempt, 8.0) * self._jitter.uniform(0.75, 1.0)
 
     def _read(self, response: Any) -> tuple[str, int | None, int | None]:
@@ -227,14 +236,14 @@ class OpenAILLM:
                                   f"--max-answer-bytes if it should be allowed)")
         if isinstance(exc, _PastDeadline):
             first = self._unavailable(exc.cause)
-            return LLMUnavailable(f"{str(first).removesuffix(self._after_retries())}; its "
+            return LLMTransient(f"{str(first).removesuffix(self._after_retries())}; its "
                                   f"next attempt ({exc.wait_s:.1f} s later) would pass the "
                                   f"{self._timeout_s:g} s deadline")
         if isinstance(exc, openai.APITimeoutError):
             reason = f"no answer within the {self._timeout_s:g} s deadline"
-            return LLMUnavailable(f"openai backend: cannot reach {where} ({reason})")
+            return LLMTransient(f"openai backend: cannot reach {where} ({reason})")
         if isinstance(exc, openai.APIConnectionError):
-            return LLMUnavailable(f"openai backend: cannot reach {where} "
+            return LLMTransient(f"openai backend: cannot reach {where} "
                                   f"({_root_cause(exc)}){self._after_retries()}")
         if isinstance(exc, openai.AuthenticationError):
             return LLMUnavailable(f"openai backend: the API key was refused by {where} (401: "
@@ -247,9 +256,10 @@ class OpenAILLM:
                                   f"(404: {_detail(exc)}); check the model name and base URL")
         if isinstance(exc, openai.APIStatusError):
             status = exc.status_code
-            retried = self._after_retries() if status in (408, 409, 429) or status >= 500 else ""
-            return LLMUnavailable(f"openai backend: {where} answered {status} "
-                                  f"({_detail(exc)}){retried}")
+            transient = status in (408, 409, 429) or status >= 500
+            kind = LLMTransient if transient else LLMUnavailable
+            return kind(f"openai backend: {where} answered {status} "
+                        f"({_detail(exc)}){self._after_retries() if transient else ''}")
         return LLMUnavailable(f"openai backend: unexpected answer from {where}: {_one_line(exc)}")
 
     def _after_retries(self) -> str:
@@ -257,6 +267,24 @@ class OpenAILLM:
         if n == 0:
             return " (retries disabled)"
         return f" after {n} {'retry' if n == 1 else 'retries'}"
+
+
+def _seconds(value: str | None, scale: float) -> float | None:
+    """A Retry-After value in seconds: a number (times ``scale``) or an HTTP date (UTC if
+    it names no zone); ``None`` for anything else, which is ignored."""
+    if not value:
+        return None
+    try:
+        wait = float(value) * scale
+    except ValueError:
+        try:
+            when = email.utils.parsedate_to_datetime(value)
+        except (TypeError, ValueError, IndexError):
+            return None
+        if when.tzinfo is None:
+            when = when.replace(tzinfo=datetime.UTC)
+        wait = when.timestamp() - time.time()
+    return max(wait, 0.0) if math.isfinite(wait) else None
 
 
 class _TooLarge(openai.OpenAIError):

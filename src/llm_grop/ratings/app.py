@@ -14,7 +14,7 @@ import contextlib
 import math
 import secrets
 import time
-from collections import deque
+from collections import OrderedDict, deque
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Annotated, Any
@@ -42,8 +42,10 @@ from llm_grop.web import GONE, TOO_LARGE, read_body, replaying, same_origin
 
 COOKIE = "llm_grop_session"
 CSRF_HEADER = "X-CSRF-Token"
-#: Join attempts one client address may make in a minute.
+#: Failed join attempts one client address may make in a minute.
 JOINS_PER_MINUTE = 10
+#: Addresses whose failed joins are remembered at once; the longest idle are forgotten.
+MAX_ADDRESSES = 10_000
 #: The largest request body accepted, bytes: a rating or a join is a few dozen.
 MAX_BODY_BYTES = 16 * 1024
 #: Headers on every answer: no framing, no sniffing, no referrer, nothing from elsewhere.
@@ -95,29 +97,36 @@ class Hardening:
 
 
 class JoinLimit:
-    """At most :data:`JOINS_PER_MINUTE` join attempts per client address in any minute, so
-    invite codes cannot be guessed quickly; more are refused with 429 and
+    """At most :data:`JOINS_PER_MINUTE` failed join attempts (unknown codes) per client
+    address in any minute, so invite codes cannot be guessed quickly, while a class
+    joining from behind one address is never held back; more are refused with 429 and
     ``Retry-After``."""
 
     def __init__(self, per_minute: int = JOINS_PER_MINUTE) -> None:
         self.per_minute = per_minute
-        self.seen: dict[str, deque[float]] = {}
+        self.seen: OrderedDict[str, deque[float]] = OrderedDict()
 
-    def check(self, request: Request) -> None:
-        """Count one attempt from ``request``'s address, or refuse it."""
+    def join(self, request: Request, rs: RatingStore, code: str) -> Session:
+        """``rs.join(code)`` for ``request``'s address, refused while it has failed too
+        often; a failure is counted."""
         now = time.monotonic()
         address = request.client.host if request.client is not None else "?"
-        recent = self.seen.setdefault(address, deque())
+        recent = self.seen.get(address, deque())
         while recent and now - recent[0] >= 60:
             recent.popleft()
         if len(recent) >= self.per_minute:
             wait = max(1, math.ceil(60 - (now - recent[0])))
-            raise Refused(429, f"too many join attempts from this address; try again in "
-                               f"{wait} s", headers={"Retry-After": str(wait)})
-        recent.append(now)
-        if len(self.seen) > 10_000:  # forget idle addresses, so memory stays bounded
-            for key in [k for k, v in self.seen.items() if not v or now - v[-1] >= 60]:
-                del self.seen[key]
+            raise Refused(429, f"too many failed join attempts from this address; try "
+                               f"again in {wait} s", headers={"Retry-After": str(wait)})
+        try:
+            return rs.join(code)
+        except Refused:
+            recent.append(now)
+            self.seen[address] = recent
+            self.seen.move_to_end(address)
+            while len(self.seen) > MAX_ADDRESSES:  # the longest idle go first
+                self.seen.popitem(last=False)
+            raise
 
 
 class JoinBody(BaseModel):
@@ -186,8 +195,7 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
 
     @app.post("/api/session")
     async def api_join(body: JoinBody, request: Request, rs: Store) -> Response:
-        joins.check(request)
-        session = rs.join(body.code)
+        session = joins.join(request, rs, body.code)
         done, total = rs.progress(session.rater_id)
         response = JSONResponse({"rater": session.rater, "csrf": session.csrf, "done": done,
                                  "total": total, "expires_at": session.expires_at})
@@ -240,8 +248,7 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
     async def join_form(code: Annotated[str, Form(max_length=100)], request: Request,
                   rs: Store) -> Response:
         _check_origin(request)
-        joins.check(request)
-        session = rs.join(code)
+        session = joins.join(request, rs, code)
         response = RedirectResponse("/guidelines", status_code=303)
         _set_cookie(response, request, session, ttl_s)
         return response

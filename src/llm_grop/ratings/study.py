@@ -112,6 +112,11 @@ def items_from_bench(bench: Path, on_picture: Callable[[int, int], None] | None 
         raise BadInput(f"--bench {bench}: no {ROWS}; give a directory 'llm-grop bench "
                        "--out' wrote")
     rows = read_rows(bench)
+    failed = sum(r.status == "llm-failed" for r in rows)
+    if failed:
+        # Their empty tables say nothing of the methods: people do not rate them.
+        raise BadInput(f"--bench {bench}: {failed} trial(s) got no LLM answer "
+                       "(status llm-failed); rerun the bench to retry them first")
     if not rows:
         raise BadInput(f"--bench {bench}: {ROWS} holds no trial")
     items = []
