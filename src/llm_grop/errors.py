@@ -12,8 +12,10 @@ class LLMGropError(Exception):
     exit_code = 2
 
 
-class BadInput(LLMGropError):
-    """Bad input: an unknown object, a malformed file, a bad flag (exit 2)."""
+class BadInput(LLMGropError, ValueError):
+    """Bad input: an unknown object, a malformed file, a bad flag (exit 2). It is a
+    :class:`ValueError`, so ``except ValueError`` catches it too. For "nothing feasible"
+    (no arrangement or plan exists) catch :class:`Infeasible`."""
 
     exit_code = 2
 

@@ -21,7 +21,7 @@ from llm_grop.cli.sweep import sweep
 from llm_grop.errors import LLMGropError
 
 
-@click.group(epilog=EPILOG)
+@click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="llm-grop")
 @VERBOSE
 def cli() -> None:
