@@ -79,7 +79,7 @@ def test_run_example_console_and_json_agree_with_each_other_and_a_fresh_run(
                        console)
     assert config and result
     number = lambda key: re.search(rf'"{key}": ([\d.]+)', excerpt)[1]  # noqa: E731
-    assert int(config[1]) == int(number("configuration_index")) + 1
+    assert int(config[1]) == int(number("configuration_index"))  # one numbering, from 0
     assert int(config[2]) == int(number("configurations"))
     assert result[1] == ("success" if '"success": true' in excerpt else "failed")
     assert result[2] == f"{float(number('execution_time_s')):.1f}"

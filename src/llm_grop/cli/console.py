@@ -77,8 +77,8 @@ def print_arrangement(result: ArrangementResult, console: Console,
                           "" if gap is None else f"{gap * 100:.1f}", r.source)
     console.print(rel_table)
 
-    pos_table = RichTable(title=f"Positions (m), configuration 1 of "
-                          f"{len(result.configurations)}", title_justify="left")
+    pos_table = RichTable(title=f"Positions (m), configuration 0 of "
+                          f"{len(result.configurations)} (from 0)", title_justify="left")
     for col in ("object", "x", "y", "yaw", "on"):
         pos_table.add_column(col, justify="right" if col in ("x", "y", "yaw") else "left")
     for p in a.placements:
@@ -98,9 +98,11 @@ def print_run(result: RunResult, console: Console, err: Console | None = None) -
     console.print(Text.assemble(("Request:", "bold"), f" {result.request}"))
     console.print(f"[bold]Method:[/bold] {result.method}   [bold]seed:[/bold] {result.seed}   "
                   f"[bold]chairs sensed:[/bold] {len(result.scene.chairs)}")
-    console.print(f"Plan: configuration {plan.configuration_index + 1} of "
-                  f"{plan.configurations_considered}, expected utility {plan.utility:.1f}, "
-                  f"feasibility {plan.feasibility:.2f}, expected cost {plan.cost_s:.1f} s")
+    # Numbered from 0, as the JSON's configuration_index: one number in both places.
+    console.print(f"Plan: configuration {plan.configuration_index} of "
+                  f"{plan.configurations_considered} (from 0); expected utility "
+                  f"{plan.utility:.1f}, feasibility {plan.feasibility:.2f}, cost "
+                  f"{plan.cost_s:.1f} s")
     table = RichTable(title="Execution", title_justify="left")
     for col in ("#", "object", "standing (x, y, θ)", "navigate", "pick", "place", "placed"):
         table.add_column(col)

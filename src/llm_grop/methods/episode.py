@@ -96,8 +96,8 @@ def execute_episode(planned: PlannedEpisode, inp: EpisodeInput, *, task: int | N
     simulator's randomness comes from the seed's ``simulator`` stream, so a plan executed
     here gives the same run as :func:`run_episode` with the same seed."""
     plan, scene = planned.plan, planned.scene
-    _say(inp, f"executing the plan (configuration {plan.configuration_index + 1}, expected "
-              f"utility {plan.utility:.1f} s) with {simulator.name}")
+    _say(inp, f"executing the plan (configuration {plan.configuration_index}, from 0; "
+              f"expected utility {plan.utility:.1f} s) with {simulator.name}")
     execution = execute(simulator, plan, scene, inp.items, seeds.stream(inp.seed, "simulator"),
                         replan=navigator(scene, planner),
                         policy=(policy or ExecutionPolicy()).for_method(attempts))
