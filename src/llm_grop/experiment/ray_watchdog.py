@@ -23,14 +23,17 @@ POLL_S = 0.5
 
 
 def _stat(pid: int) -> tuple[int, int] | None:
-    """``(parent pid, start time in clock ticks)`` of ``pid``, or ``None`` if it is gone."""
+    """``(parent pid, start time in clock ticks)`` of ``pid``, or ``None`` if it is gone
+    (or a zombie: dead, only not yet reaped)."""
     try:
         text = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
+        # The command name, in parentheses, may hold spaces: fields follow its last ")".
+        fields = text[text.rindex(")") + 2:].split()
+        if fields[0] in ("Z", "X"):
+            return None
+        return int(fields[1]), int(fields[19])
+    except (OSError, ValueError, IndexError):  # gone, or caught half-written
         return None
-    # The command name, in parentheses, may hold spaces: fields follow its last ")".
-    fields = text[text.rindex(")") + 2:].split()
-    return int(fields[1]), int(fields[19])
 
 
 def descendants(root: int, skip: int) -> dict[int, int]:
@@ -60,7 +63,9 @@ def watch(driver: int) -> None:
     me = os.getpid()
     seen: dict[int, int] = {}
     while _stat(driver) is not None:
-        seen = descendants(driver, me)
+        # Every process ever seen is kept: one that left the tree (its parent died
+        # first) is still the driver's to take down.
+        seen |= descendants(driver, me)
         time.sleep(POLL_S)
     for pid, started in seen.items():
         info = _stat(pid)
