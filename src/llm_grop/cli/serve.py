@@ -85,6 +85,7 @@ def serve(host: str, port: int, backends: tuple[str, ...], model: str | None,
                              replay_path=replay_path.absolute() if replay_path else None)
     db = (db or _default_db()).expanduser().absolute()
     check_out_dir("db", db.parent)
+    db.parent.mkdir(parents=True, exist_ok=True)  # checked above: it can be made
     config = ServiceConfig(db=db, backends=tuple(Backend(n, options) for n in names),
                            workers=workers, token=token,
                            limits=Limits(run_time_s=run_time_s, queue=queue,
