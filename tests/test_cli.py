@@ -50,8 +50,9 @@ def test_record_then_replay_is_byte_identical(chat_server, tmp_path: Path, monke
     replays = []
     for k in range(2):
         path = tmp_path / f"replay{k}.json"
+        # Without the cache: a second run answered from it would say so in its log.
         assert main(["arrange", REQUEST, "--llm", "replay", "--replay", str(rec),
-                     "--json", str(path), "-q"]) == 0
+                     "--json", str(path), "--no-cache", "-q"]) == 0
         replays.append(path.read_bytes())
     assert replays[0] == replays[1]
     recorded, replayed = json.loads(first.read_text()), json.loads(replays[0])

@@ -75,7 +75,7 @@ def test_rate_request_flag_overrides_the_file(capsys) -> None:
     ('{"objects": []}', "table"),
     ('{"final": 3}', "final"),
     ('{"final": {"table": {"size": [0.9, 0.6]}, "objects": [{"name": "mug"}]}}',
-     "final: objects[0] ('mug').x: Field required"),
+     "final: objects[0] ('mug').x: required, but missing"),
 ])
 def test_rate_bad_file_is_one_line_error_exit_2(content: str, expect: str, tmp_path: Path,
                                                 capsys) -> None:

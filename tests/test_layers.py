@@ -47,6 +47,11 @@ FORBIDDEN: dict[str, set[str]] = {
                 "env", "render", "service"},
     # The service calls the public API as the CLI does; it never rates, sweeps or studies.
     "service": {"cli", "evaluation", "experiment", "ratings", "env"},
+    # The doctor must run when parts are broken: it checks them from outside and loads
+    # none of the pipeline.
+    "doctor": {"api", "cli", "world", "geometry", "language", "arrangement", "planning",
+               "methods", "evaluation", "experiment", "execution", "render", "env", "ratings",
+               "service"},
 }
 #: What a package marked ``*`` may still import.
 ALLOWED_BELOW = {"world": {"errors"}, "geometry": {"errors", "world"}}

@@ -303,7 +303,7 @@ def test_unpicklable_run_time_method_is_refused_for_workers(
         plugins.registered()
     message = str(caught.value)
     assert "\n" not in message
-    assert message.startswith("--method: method 'unpicklable-demo' was registered at run time")
+    assert message.startswith("method: method 'unpicklable-demo' was registered at run time")
     METHODS.unregister("unpicklable-demo")
     _, entries = plugins.registered().get(METHODS.group, (METHODS.module, {}))
     assert "unpicklable-demo" not in entries
@@ -456,6 +456,6 @@ def test_entry_defined_in_an_interactive_main_is_refused_before_the_bench(tmp_pa
     proc = subprocess.run([sys.executable, "-c", code, str(out)], capture_output=True,
                           text=True, timeout=TIMEOUT_S, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    assert "--simulator: simulator 'mine' was registered at run time but cannot reach worker " \
+    assert "simulator: simulator 'mine' was registered at run time but cannot reach worker " \
            "processes (it was defined in an interactive __main__)" in proc.stdout
     assert proc.stdout.strip().endswith("absent")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -114,19 +114,21 @@ def arrange(request: str | None = None, *, task: int | None = None,
             table: Table | None = None, seed: int = 0, catalog: Catalog | None = None,
             catalog_files: Sequence[str | PathLike[str]] = (),
             options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
-            on_event: Callable[[str], None] | None = None, guess: bool = True
-            ) -> ArrangementResult:
+            on_event: Callable[[str], None] | None = None, guess: bool = True,
+            cache: str | PathLike[str] | None = None) -> ArrangementResult:
     """Arrange the objects of ``request`` (or of the paper's Table I ``task``) on ``table``.
 
     ``llm`` is a backend name (``"embedded"``, ``"openai"``, ``"replay"``), an
     :class:`LLM`, or a :class:`CallLog`. ``seed`` fixes every LLM call's seed and
     the sampler, so the same inputs give the same result. ``record`` appends each
     LLM call to a JSONL file that ``llm="replay"`` can read back. ``guess=False`` refuses
-    a request whose reading needs the LLM to choose objects it does not name.
+    a request whose reading needs the LLM to choose objects it does not name. ``cache``
+    is the directory of an LLM answer cache (:func:`make_llm`): a seeded call asked
+    before is answered from it.
     """
     catalog = catalog or Catalog.load(catalog_files)
     options = options or ArrangeOptions()
-    log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record)
+    log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record, cache)
     reading = understand(request, task=task, catalog=catalog, llm=log, seed=seed,
                          params=options.params, on_event=on_event, guess=guess,
                          table=table or Table())
@@ -145,7 +147,8 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
         feasibility: str = "default",
         tasks: Mapping[int, Task] | None = None,
         on_event: Callable[[str], None] | None = None, guess: bool = True,
-        execution: ExecutionPolicy | None = None) -> RunResult:
+        execution: ExecutionPolicy | None = None,
+        cache: str | PathLike[str] | None = None) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
 
     ``scene`` is a :class:`Scene`, a scene YAML file, or ``None`` for the packaged dining
@@ -162,8 +165,9 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
     replaces the paper's Table I for ``task``; ``guess=False`` refuses a request whose
     reading needs the LLM to choose objects; ``execution`` sets the executive's attempt
     counts and place tolerances (default: the authors' counts, 20 manipulation attempts
-    for LLM-GROP and 10 for the baselines). The same seed gives the same run: it is
-    :func:`plan` followed by :func:`execute`.
+    for LLM-GROP and 10 for the baselines); ``cache`` is an LLM answer cache's directory
+    (:func:`make_llm`). The same seed gives the same run: it is :func:`plan` followed by
+    :func:`execute`.
     """
     from llm_grop.simulation.registry import create_simulator
 
@@ -172,7 +176,7 @@ def run(request: str | None = None, *, task: int | None = None, method: str = "l
                    seed=seed, llm=llm, llm_options=llm_options, catalog=catalog,
                    catalog_files=catalog_files, options=options, record=record,
                    planner=planner, feasibility=feasibility, tasks=tasks, on_event=on_event,
-                   guess=guess, check=getattr(sim, "check", None))
+                   guess=guess, check=getattr(sim, "check", None), cache=cache)
     return execute(planned, simulator=sim, execution=execution)
 
 
@@ -186,7 +190,8 @@ def plan(request: str | None = None, *, task: int | None = None,
          planner: GropOptions | None = None, feasibility: str = "default",
          tasks: Mapping[int, Task] | None = None,
          on_event: Callable[[str], None] | None = None, guess: bool = True,
-         check: Callable[[Scene, Sequence[Item]], None] | None = None) -> PlanResult:
+         check: Callable[[Scene, Sequence[Item]], None] | None = None,
+         cache: str | PathLike[str] | None = None) -> PlanResult:
     """Arrange and plan, without executing: what :func:`run` does before the simulator
     starts, for a robot stack to execute (the arguments are :func:`run`'s).
 
@@ -225,7 +230,7 @@ def plan(request: str | None = None, *, task: int | None = None,
 
     def log() -> CallLog:
         if not made:
-            made.append(make_llm(llm, llm_options, record))  # type: ignore[arg-type]
+            made.append(make_llm(llm, llm_options, record, cache))  # type: ignore[arg-type]
         return made[0]
 
     if arrangement is not None:
@@ -237,6 +242,10 @@ def plan(request: str | None = None, *, task: int | None = None,
                              guess=guess, table=base.target_top)
     items = seat_items(reading.items, base.target_top)  # a scene with seats: one setting each
     top = seat_table(base.target_top, items)  # too many diners: reported before any work
+    if top.diners and not base.diners:
+        # The seats the settings were placed for are the scene's, so a 3D world draws a
+        # placemat at each and the diner's camera sits at the first.
+        base = replace(base, diners=top.diners)
     if check is not None:
         check(base, items)
     episode = prepare_episode(base, items, seed, chairs=chairs)

@@ -13,11 +13,36 @@ class LLMGropError(Exception):
 
 
 class BadInput(LLMGropError, ValueError):
-    """Bad input: an unknown object, a malformed file, a bad flag (exit 2). It is a
+    """Bad input: an unknown object, a malformed file, a bad argument (exit 2). It is a
     :class:`ValueError`, so ``except ValueError`` catches it too. For "nothing feasible"
-    (no arrangement or plan exists) catch :class:`Infeasible`."""
+    (no arrangement or plan exists) catch :class:`Infeasible`.
+
+    ``param`` names the Python API's parameter at fault (``"method"``) and ``value`` what
+    was given for it, when that helps: the message then reads ``method: unknown method
+    'nope' ...`` or ``out='runs/x': ...``, and the command line rewords the name as its
+    flag (``--method``, ``--out runs/x``). ``detail`` is the message without the name.
+    """
 
     exit_code = 2
+
+    def __init__(self, message: str = "", *, param: str | None = None,
+                 value: object = None) -> None:
+        self.param, self.value, self.detail = param, value, message
+        shown = value if isinstance(value, int | float) else str(value)
+        named = param if value is None else f"{param}={shown!r}"
+        super().__init__(message if param is None else f"{named}: {message}")
+
+    def __reduce__(self) -> tuple[object, ...]:
+        # Worker processes send errors back pickled; the parameter must survive the trip
+        # for the command line to name its flag.
+        if self.param is None:
+            return super().__reduce__()
+        return (_rebuilt, (type(self), self.detail, self.param, self.value))
+
+
+def _rebuilt(cls: type[BadInput], detail: str, param: str, value: object) -> BadInput:
+    """A pickled :class:`BadInput` with its parameter, made again."""
+    return cls(detail, param=param, value=value)
 
 
 class UnknownObject(BadInput):
@@ -26,8 +51,12 @@ class UnknownObject(BadInput):
     def __init__(self, name: str, suggestions: list[str], where: str = "request") -> None:
         self.name = name
         self.suggestions = suggestions
+        self.where = where
         hint = f"; did you mean {', '.join(repr(s) for s in suggestions)}?" if suggestions else ""
         super().__init__(f"{where}: unknown object {name!r}{hint}")
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (type(self), (self.name, self.suggestions, self.where))
 
 
 class CatalogError(BadInput):

@@ -18,18 +18,19 @@ from pathlib import Path
 from llm_grop.errors import BadInput
 
 
-def hold(lock: Path, where: str, holder: str) -> int:
+def hold(lock: Path, param: str, value: object, holder: str) -> int:
     """Take the exclusive lock on the file ``lock`` (made if missing); the file descriptor
-    that holds it, for :func:`release`. :class:`BadInput` naming ``where`` and the
-    holder's process id if another process (``holder``: what it is, in words) has it."""
+    that holds it, for :func:`release`. :class:`BadInput` naming the parameter ``param``
+    given ``value`` and the holder's process id if another process (``holder``: what it
+    is, in words) has it."""
     fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         pid = os.read(fd, 32).decode(errors="replace").strip() or "?"
         os.close(fd)
-        raise BadInput(f"{where}: in use by {holder} (pid {pid}); wait for it to end or "
-                       "stop it") from None
+        raise BadInput(f"in use by {holder} (pid {pid}); wait for it to end or stop it",
+                       param=param, value=value) from None
     os.ftruncate(fd, 0)
     os.write(fd, str(os.getpid()).encode())
     return fd

@@ -81,11 +81,16 @@ class Registry(Generic[T]):
     def __post_init__(self) -> None:
         _REGISTRIES[self.group] = self
 
+    @property
+    def param(self) -> str:
+        """The Python API's parameter that chooses one (``method``), which errors name."""
+        return self.flag.removeprefix("--").replace("-", "_")
+
     def register(self, name: str, entry: T) -> None:
         """Make ``entry`` available as ``name`` in this process (it replaces any other)."""
         key = _normal(name)
         if not key:
-            raise BadInput(f"{self.flag}: a {self.kind} needs a non-empty name")
+            raise BadInput(f"a {self.kind} needs a non-empty name", param=self.param)
         self._validate(key, entry, "registered at run time")
         self._runtime[key] = entry
         self._loaded.pop(key, None)
@@ -136,7 +141,7 @@ class Registry(Generic[T]):
     def get(self, name: str) -> T:
         """The entry called ``name``, imported on first use.
 
-        Raises :class:`BadInput` (one line, naming the flag) for an unknown name or a plugin
+        Raises :class:`BadInput` (one line, naming the parameter) for an unknown name or a plugin
         that fails to load.
         """
         key = _normal(name)
@@ -154,8 +159,9 @@ class Registry(Generic[T]):
             try:
                 obj = ep.load()
             except Exception as exc:  # noqa: BLE001 - a plugin's failure is the user's input
-                raise BadInput(f"{self.flag}: plugin {key!r} from {_dist(ep)} failed to load "
-                               f"({ep.value}): {type(exc).__name__}: {exc}") from None
+                raise BadInput(f"plugin {key!r} from {_dist(ep)} failed to load "
+                               f"({ep.value}): {type(exc).__name__}: {exc}",
+                               param=self.param) from None
             self._validate(key, obj, f"plugin {_dist(ep)}")
             log.debug("loaded %s %r from %s", self.kind, key, _dist(ep))
         self._loaded[key] = obj
@@ -184,24 +190,24 @@ class Registry(Generic[T]):
         except Exception as exc:
             if origin == "llm-grop":
                 raise
-            raise BadInput(f"{self.flag}: {origin}: {self.kind} {key!r} failed to start: "
-                           f"{type(exc).__name__}: {exc}") from None
+            raise BadInput(f"{origin}: {self.kind} {key!r} failed to start: "
+                           f"{type(exc).__name__}: {exc}", param=self.param) from None
         missing = [a for a in self.product if not hasattr(made, a)]
         if missing:
-            raise BadInput(f"{self.flag}: {origin}: {self.kind} {key!r} made an object "
-                           f"without {', '.join(missing)}")
+            raise BadInput(f"{origin}: {self.kind} {key!r} made an object without "
+                           f"{', '.join(missing)}", param=self.param)
         return made
 
     def _validate(self, name: str, obj: Any, origin: str) -> None:
         if self.factory is not None and not callable(obj):
-            raise BadInput(f"{self.flag}: {origin}: {self.kind} {name!r} is not a factory "
-                           f"{self.factory}")
+            raise BadInput(f"{origin}: {self.kind} {name!r} is not a factory "
+                           f"{self.factory}", param=self.param)
         if self.check is not None:
             self.check(name, obj, origin)
 
     def _unknown(self, name: str) -> BadInput:
-        return BadInput(f"{self.flag}: unknown {self.kind} {name!r} "
-                        f"(available: {', '.join(self.names())})")
+        return BadInput(f"unknown {self.kind} {name!r} "
+                        f"(available: {', '.join(self.names())})", param=self.param)
 
 
 def _normal(name: str) -> str:
@@ -230,9 +236,10 @@ def registered(used: Mapping[str, Iterable[str]] | None = None
         for name, entry in entries.items():
             reason = _unportable(entry)
             if reason is not None:
-                raise BadInput(f"{reg.flag}: {reg.kind} {name!r} was registered at run time "
+                raise BadInput(f"{reg.kind} {name!r} was registered at run time "
                                f"but cannot reach worker processes ({reason}); define it in "
-                               "a module, declare it as an entry point, or use one worker")
+                               "a module, declare it as an entry point, or use one worker",
+                               param=reg.param)
         if entries:
             out[group] = (reg.module, entries)
     return out

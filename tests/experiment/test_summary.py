@@ -144,7 +144,7 @@ def test_bad_rows_are_rejected(change: dict[str, Any], message: str) -> None:
 def test_missing_field_is_named() -> None:
     bad = row("grop", 1, 3, 10.0)
     del bad["rating"]
-    with pytest.raises(BadInput, match="row 1: rating: Field required"):
+    with pytest.raises(BadInput, match="row 1: rating: required, but missing"):
         summarize([bad])
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from llm_grop.cli import main
+from llm_grop.errors import BadInput
 from llm_grop.experiment.sweep import load_sweep
 from llm_grop.experiment.trial import RUN_DEPENDENT_FIELDS
 
@@ -109,23 +110,28 @@ def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> Non
 
 @pytest.mark.parametrize(("text", "needle"), [
     (SWEEP.replace("trials: 2", "trials: two"),
-     "s.yaml: trials: Input should be a valid integer"),
-    (SWEEP.replace("trials: 2", "trails: 2"), "s.yaml: trails: Extra inputs are not permitted"),
+     "s.yaml: trials: expected a whole number, got 'two'"),
+    (SWEEP.replace("trials: 2", "trails: 2"), "s.yaml: trails: unknown key; did you mean "
+                                              "'trials'?"),
     (SWEEP.replace("chairs: [0, 2]", "chairs: [0, -2]"),
-     "s.yaml: grid.chairs[1]: Input should be greater than or equal to 0"),
-    (SWEEP.replace("chairs: [0, 2]", "chairs: []"),
-     "s.yaml: grid.chairs: List should have at least 1 item"),
+     "s.yaml: grid.chairs[1]: must be at least 0, got -2"),
+    (SWEEP.replace("chairs: [0, 2]", "chairs: []"), "s.yaml: grid.chairs: must not be empty"),
     (SWEEP.replace("chairs: [0, 2]", "colour: [red]"),
-     "s.yaml: grid.colour: Extra inputs are not permitted"),
+     "s.yaml: grid.colour: unknown key; expected one of tasks, methods, trials, seed, scene, "
+     "chairs, table, simulator, feasibility, weight, fidelity_weight, llm, preferences, "
+     "images"),
     (SWEEP.replace("trials: 2", "trials: 2\nchairs: 1"),
-     "'chairs' is both in grid and at the top level"),
+     "s.yaml: chairs: both in grid and at the top level; give it in one place"),
     (SWEEP.replace("backend: replay", "backend: replay, temprature: 0.5"),
-     "s.yaml: llm.temprature: Extra inputs are not permitted"),
+     "s.yaml: llm.temprature: unknown key; did you mean 'temperature'?"),
     (SWEEP.replace("methods: grop,llm-grop\n", "").replace(
         "chairs: [0, 2]", "methods: [grop, 'grop,magic']"),
      "s.yaml: cell weight=20,methods=grop_magic: methods: unknown method 'magic'"),
     (SWEEP.replace("chairs: [0, 2]", "table: [scene, 12x8]"),
      "s.yaml: cell weight=20,table=12x8: table: 12 x 8 m is not a dining table"),
+    (SWEEP.replace("chairs: [0, 2]", "fidelity_weight: [.inf]"),
+     "s.yaml: cell weight=20,fidelity_weight=inf: fidelity_weight: must be a finite number "
+     ">= 0 (seconds per centimetre), got inf"),
     (SWEEP.replace("chairs: [0, 2]", "simulator: [gazebo]"),
      "s.yaml: cell weight=20,simulator=gazebo: simulator: unknown simulator 'gazebo'"),
     (SWEEP.replace(str(RECORDING), "missing.jsonl"), "missing.jsonl: replay file not found"),
@@ -136,8 +142,9 @@ def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> Non
     (SWEEP.replace("chairs: [0, 2]", "table: [1.8x0.9m, 1.8X0.9m]"),
      "grid: two cells would share the directory 'weight=20,table=1.8X0.9m'"),
     (SWEEP.replace("chairs: [0, 2]", "chairs:"),
-     "grid.chairs has no values; give a list, or leave the key out"),
+     "s.yaml: grid.chairs: no values; give a list, or leave the key out"),
     ("grid: [1, 2]\n", "s.yaml: grid: expected an object"),
+    ("- tasks: 1\n", "s.yaml: top level: expected a mapping"),
     ("tasks: [1\n", "s.yaml line 2: not valid YAML"),
 ])
 def test_a_malformed_sweep_file_is_one_line_naming_the_field(
@@ -147,6 +154,57 @@ def test_a_malformed_sweep_file_is_one_line_naming_the_field(
     assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
     assert needle in _one_line_error(capsys)
     assert not (tmp_path / "out").exists()
+
+
+#: Mistakes in a sweep file and the exact line each gives (the file's path before it).
+EXACT = [
+    # An int where text is expected.
+    ("simulator: 1\n", "simulator: expected text, got 1"),
+    ("llm: {backend: replay, model: 7}\n", "llm.model: expected text, got 7"),
+    # One value that is neither of a list's forms, and a list where one value goes.
+    ("tasks: 1.5\n", "tasks: expected text or a list, got 1.5"),
+    ("grid: {tasks: [1, true]}\n", "grid.tasks[1]: expected text or a list, got True"),
+    ("tasks: [1, x]\n", "tasks[1]: expected a whole number, got 'x'"),
+    ("chairs: [0, 4]\n", "chairs: one value here, not a list; to run each value, put chairs "
+                         "under grid"),
+    # Misspelt keys: at the top level, in grid, in an llm entry of the grid.
+    ("trails: 2\n", "trails: unknown key; did you mean 'trials'?"),
+    ("grid: {chiars: [0, 4]}\n", "grid.chiars: unknown key; did you mean 'chairs'?"),
+    ("grid: {llm: [{backend: replay}, {backend: openai, modle: m}]}\n",
+     "grid.llm[1].modle: unknown key; did you mean 'model'?"),
+    ("grid: {llm: {backend: openai, modle: m}}\n",
+     "grid.llm.modle: unknown key; did you mean 'model'?"),
+]
+
+
+@pytest.mark.parametrize(("text", "message"), EXACT)
+def test_each_mistake_is_one_exact_line(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    with pytest.raises(BadInput) as info:
+        load_sweep(path)
+    assert str(info.value) == f"{path}: {message}"
+
+
+def test_the_command_line_says_it_in_one_line_exit_2(tmp_path: Path, capsys) -> None:
+    path = tmp_path / "s.yaml"
+    path.write_text(SWEEP.replace("chairs: [0, 2]", "chiars: [0, 2]"))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert _one_line_error(capsys) == (f"llm-grop: error: {path}: grid.chiars: unknown key; "
+                                       "did you mean 'chairs'?")
+
+
+def test_one_value_is_a_list_of_one(tmp_path: Path) -> None:
+    path = tmp_path / "s.yaml"
+    path.write_text("tasks: 1\nmethods: grop\ngrid: {chairs: 4, weight: [20, 40]}\n")
+    sweep = load_sweep(path)
+    assert [c.name for c in sweep.cells] == ["chairs=4,weight=20", "chairs=4,weight=40"]
+    assert [(c.values.tasks, c.values.chairs) for c in sweep.cells] == [([1], 4), ([1], 4)]
+    path.write_text("grid: {tasks: [1, [2, 3], paper], llm: {backend: replay, name: r}}\n")
+    sweep = load_sweep(path)
+    assert [c.name for c in sweep.cells] == ["tasks=1,llm=r", "tasks=2+3,llm=r",
+                                             "tasks=paper,llm=r"]
+    assert [c.values.tasks for c in sweep.cells] == [[1], [2, 3], "paper"]
 
 
 def test_a_missing_sweep_file_is_one_line(tmp_path: Path, capsys) -> None:

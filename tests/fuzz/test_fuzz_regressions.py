@@ -24,7 +24,8 @@ _TABLE = "{name: dining table, center: [4, 3], size: [0.9, 0.6]}"
      "'side\\ntable')"),
     # So was an unknown key with one.
     (_ROOM + f'tables: [{_TABLE}]\ntarget: dining table\n"col\\nour": red\n',
-     "x.yaml: 'col\\nour': Extra inputs are not permitted"),
+     "x.yaml: 'col\\nour': unknown key; expected one of name, room, walls, tables, target, "
+     "source_tables, sources, chairs, chair_band_m, robot, diners"),
     # And a chair's name where the robot's start collides with the chair.
     (_ROOM + f"tables: [{_TABLE}]\ntarget: dining table\n"
      'chairs: [{name: "a\\nchair", center: [0.8, 0.8], size: [0.4, 0.4]}]\n'

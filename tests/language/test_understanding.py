@@ -199,12 +199,12 @@ def test_guesses_are_marked_and_no_guess_refuses_them(chat_server: ChatServer,
     assert len(request.warnings) == 1 and "chose what the request does not say" in \
         request.warnings[0]
     with pytest.raises(BadInput, match=r"chose what 'a plate and coffee' does not say \(1 "
-                                       r"mug\), and --no-guess forbids it"):
+                                       r"mug\), and guess=False forbids it"):
         understand("a plate and coffee", catalog=catalog, guess=False, llm=openai(
             chat_server, answer(("dinner plate", 1, "a plate"), ("mug", 1, "coffee"))))
     log = no_llm()
     with pytest.raises(BadInput, match="nothing in 'breakfast for two' names an object, and "
-                                       "--no-guess forbids"):
+                                       "guess=False forbids"):
         understand("breakfast for two", catalog=catalog, llm=log, guess=False)
     assert not log.calls
 

@@ -80,7 +80,7 @@ def test_a_rater_rates_with_the_keyboard_leaves_and_comes_back(
                 context = browser.new_context(viewport=viewport)
                 page = context.new_page()
                 page.goto((report / "report.html").as_uri())
-                expect(page.locator("h1")).to_have_text("Human ratings")
+                expect(page.locator("h1")).to_have_text(f"Human ratings: {bench_dir.name}")
                 expect(page.locator("img.figure").first).to_be_visible()
                 assert fits(page)
                 page.screenshot(path=str(screenshots / f"{name}.png"), full_page=True)

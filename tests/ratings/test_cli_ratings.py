@@ -11,7 +11,7 @@ import pytest
 
 from llm_grop.cli import main
 from llm_grop.ratings.store import EXPORT_COLUMNS
-from ratings_support import ADMIN, load_benchmark
+from ratings_support import ADMIN, RECORDING, load_benchmark
 
 
 def one_line_error(capsys) -> str:
@@ -74,6 +74,24 @@ def test_bad_input_is_one_line(bench_dir: Path, study, tmp_path: Path, capsys, a
     assert main(argv) == 2
     err = one_line_error(capsys)
     assert err.startswith("llm-grop: error: ") and needle in err, err
+
+
+def test_a_sweep_directory_is_refused_with_its_cells(tmp_path: Path, capsys) -> None:
+    sweep = tmp_path / "s.yaml"
+    sweep.write_text(f"tasks: 1\nmethods: grop\ntrials: 1\n"
+                     f"llm: {{backend: replay, replay: {RECORDING}}}\n"
+                     "grid: {weight: [5, 10, 20, 40, 80, 160, 320]}\n")
+    out = tmp_path / "out"
+    assert main(["sweep", str(sweep), "--out", str(out), "-q"]) == 0
+    db = tmp_path / "s.db"
+    assert main(["ratings", "create", "--bench", f"{out}/", "--db", str(db)]) == 2
+    cells = ", ".join(f"{out}/weight={w}" for w in (5, 10, 20, 40, 80, 160))
+    assert one_line_error(capsys) == (f"llm-grop: error: --bench {out}: a sweep directory; "
+                                      f"choose one of its cells: {cells} and 1 more")
+    assert not db.exists()
+    # A cell it lists is a bench directory a study is made of.
+    assert main(["ratings", "create", "--bench", str(out / "weight=320"), "--db", str(db)]) == 0
+    assert "Study 'weight=320': 1 picture of task 1 by 1 method, in " in capsys.readouterr().out
 
 
 def test_serve_refuses_a_port_in_use(study, capsys) -> None:

@@ -124,6 +124,8 @@ BAD = [
                                                     "size": [0.5, 0.5]}] * 101}}, 422,
      "scene.tables: 101 entries; this server takes at most 100"),
     ("/v1/runs", {"task": 8, "simulator": "bullet"}, 422, "simulator: unknown simulator"),
+    ("/v1/arrangements", {"request": REQUEST, "preferences": ["the mug near the plate"]}, 422,
+     "preferences: 'the mug near the plate': cannot read it as a relation"),
 ]
 
 

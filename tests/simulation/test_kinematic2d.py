@@ -158,6 +158,6 @@ def test_a_truth_other_than_kinematic2d_s_own_needs_kinematic2d(capsys) -> None:
     from llm_grop.cli import main
 
     assert main(["run", "a mug", "--simulator", "mujoco", "--truth", "mujoco", "-q"]) == 2
-    assert "--truth mujoco: needs --simulator kinematic2d" in one_line_error(capsys)
+    assert "--truth mujoco: needs the kinematic2d simulator" in one_line_error(capsys)
     assert main(["run", "a mug", "--truth", "nope", "-q"]) == 2
     assert "--truth: unknown profile 'nope'" in one_line_error(capsys)

@@ -142,7 +142,7 @@ def test_explicit_files_override_the_environment(tmp_path: Path,
 @pytest.mark.parametrize(("text", "field", "message"), [
     ("objects: [\n  - name: x\n", "line 2", "not valid YAML"),
     ("objects:\n  - name: spork\n    size: [0.02, 0.15]\n    height: 0.01\n",
-     "objects[0] ('spork').shape", "Field required"),
+     "objects[0] ('spork').shape", "required, but missing"),
     ("objects:\n" + SPORK.replace("[0.03", "[-0.03"), "objects[0] ('spork').size",
      "size must be positive"),
     ("objects:\n" + SPORK.replace("[0.03", "[.nan"), "objects[0] ('spork').size",
@@ -152,7 +152,9 @@ def test_explicit_files_override_the_environment(tmp_path: Path,
     ("objects:\n" + SPORK + SPORK.replace("spork", "saucer").replace("box", "circle"),
      "objects[1] ('saucer').size", "a circle needs size [d, d]"),
     ("objects:\n" + SPORK + "    colour: red\n", "objects[0] ('spork').colour",
-     "Extra inputs are not permitted"),
+     "unknown key; expected one of name, shape, size, height, synonyms"),
+    ("objects:\n" + SPORK + "    hieght: 0.02\n", "objects[0] ('spork').hieght",
+     "unknown key; did you mean 'height'?"),
     ("objects:\n" + SPORK.replace("box", "star"), "objects[0] ('spork').shape",
      "'circle' or 'box'"),
     ("objects:\n" + SPORK.replace("spork", "'!!'"), "objects[0] ('!!').name",
@@ -247,5 +249,5 @@ def test_a_field_name_with_a_line_break_stays_on_one_line() -> None:
     text = 'objects: [{name: spork, shape: box, size: [1, 1], height: 1, "x\\ny": 1}]\n'
     with pytest.raises(CatalogError) as info:
         Catalog.from_text(text, "c.yaml")
-    assert str(info.value) == ("c.yaml: objects[0] ('spork').'x\\ny': Extra inputs are not "
-                               "permitted, got 1")
+    assert str(info.value) == ("c.yaml: objects[0] ('spork').'x\\ny': unknown key; expected "
+                               "one of name, shape, size, height, synonyms")

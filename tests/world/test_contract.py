@@ -118,7 +118,7 @@ def test_readers_keep_fields_a_later_version_adds() -> None:
 
 
 @pytest.mark.parametrize(("mutate", "needle"), [
-    (lambda d: d.pop("table"), "a.json: table: Field required"),
+    (lambda d: d.pop("table"), "a.json: table: required, but missing"),
     (lambda d: d["objects"][0].update(x="left"), "a.json: objects[0] ('mug').x: "),
     (lambda d: d["objects"][0].update(shape="oval"), "objects[0] ('mug').shape"),
     (lambda d: d.update(relations=[{"subject": "mug", "relation": "near",

@@ -67,12 +67,12 @@ def test_rectangles_parse_as_before() -> None:
 @pytest.mark.parametrize("text, words", [
     ("round:1.2x0.8", "a round table has one size, its diameter"),
     ("round:", "round:D such as round:1.2"),
-    ("round:0", "--table: size must be positive"),
+    ("round:0", "table: size must be positive"),
     ("oval:1.2", "expected WxD in metres such as 0.9x0.6, or round:D"),
     ("1.2", "expected WxD"),
 ])
 def test_bad_table_text_is_one_bad_input(text: str, words: str) -> None:
-    with pytest.raises(BadInput, match="^--table: ") as err:
+    with pytest.raises(BadInput, match="^table: ") as err:
         Table.parse(text)
     assert words in str(err.value) and "\n" not in str(err.value)
 
@@ -133,7 +133,7 @@ def test_a_round_scene_round_trips_through_its_json_form() -> None:
     ("size: [1.0, 1.0], diameter: 1.2", "tables[0] ('round table').diameter: 1.2 m disagrees "
                                         "with size [1, 1]"),
     ("yaw: 0.0", "tables[0] ('round table').size: Field required"),
-    ("diameter: 0", "tables[0] ('round table').diameter: Input should be greater than 0"),
+    ("diameter: 0", "tables[0] ('round table').diameter: must be greater than 0, got 0"),
     # Its bounding square would overlap the counter's corner region; the circle does not,
     # but 4.2 m reaches out of the 4 m deep room.
     ("diameter: 4.2", "tables[0] ('round table'): extends outside the room (6 x 4 m)"),
@@ -175,11 +175,11 @@ def test_set_target_top_makes_the_packaged_table_round() -> None:
 
 
 @pytest.mark.parametrize("top, keep, words", [
-    (Table.circle(6.5), True, "--table: a round 6.5 m table as 'dining table' extends outside"),
+    (Table.circle(6.5), True, "table: a round 6.5 m table as 'dining table' extends outside"),
     (Table(6.5, 5.0), True, "overlaps table 'kitchen counter'"),
     (Table(6.0, 0.6), True, "overlaps wall 1"),
     (Table.circle(1.2), False, "covers the robot's start"),
-    (Table.circle(2.0), True, "overlaps chair 1; sample chairs with --chairs N"),
+    (Table.circle(2.0), True, "overlaps chair 1; sample the chairs instead (chairs=N)"),
 ])
 def test_a_top_that_does_not_fit_is_bad_input(top: Table, keep: bool, words: str) -> None:
     from llm_grop.world.scene import Chair
@@ -188,7 +188,7 @@ def test_a_top_that_does_not_fit_is_bad_input(top: Table, keep: bool, words: str
     scene = scene.with_chairs((Chair("chair 1", Box(4.0, 2.05, 0.45, 0.45)),))
     if "start" in words:
         scene = replace(scene, robot_start=replace(scene.robot_start, x=4.0, y=2.3))
-    with pytest.raises(BadInput, match="^--table: ") as err:
+    with pytest.raises(BadInput, match="^table: ") as err:
         set_target_top(scene, top, keep_chairs=keep)
     assert words in str(err.value)
     if "chair" in words:  # chairs sampled afresh (--chairs N) are not in the way

@@ -171,7 +171,7 @@ COUNTER = "{name: counter, center: [0.4, 2.0], size: [0.5, 1.2]}"
     (_swap("target: dining table", "target: kitchen table"),
      "target: no table named 'kitchen table' (tables: dining table, counter)"),
     ("room: {width: 6, depth: 4}\ntables: []\ntarget: t\n", "tables: no tables"),
-    ("room: {width: 6, depth: 4}\ntarget: t\n", "tables: Field required"),
+    ("room: {width: 6, depth: 4}\ntarget: t\n", "tables: required, but missing"),
     (ROOM + "source_tables: [pantry]\n", "source_tables[0]: no table named 'pantry'"),
     (ROOM + "source_tables: [dining table]\n", "source_tables[0]: 'dining table' is the target"),
     (ROOM + "sources:\n  - {object: mug, table: pantry, position: [0.4, 2.0]}\n",
@@ -221,9 +221,9 @@ COUNTER = "{name: counter, center: [0.4, 2.0], size: [0.5, 1.2]}"
     (_swap("start: [1.5, 0.6, 0.0]", "start: [1.5, 0.6, 0.0], reach_min_m: 2"),
      "robot.reach_min_m:"),
     (_swap("start: [1.5, 0.6, 0.0]", "start: [1.5, 0.6, 0.0], capacity: 0"), "robot.capacity:"),
-    (_swap("start: [1.5, 0.6, 0.0]", "start: [1.5, 0.6]"), "robot.start[2]: Field required"),
+    (_swap("start: [1.5, 0.6, 0.0]", "start: [1.5, 0.6]"), "robot.start[2]: required, but missing"),
     (_swap("start: [1.5, 0.6, 0.0]", "start: [1.5, 0.6, 0.0], speed: 2"),
-     "robot.speed: Extra inputs are not permitted"),
+     "robot.speed: unknown key; did you mean 'speed_mps'?"),
 ])
 def test_bad_scene(tmp_path: Path, text: str, needle: str) -> None:
     assert needle in _error(tmp_path, text)

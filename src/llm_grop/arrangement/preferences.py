@@ -82,23 +82,22 @@ def read_edge_preferences(required: Sequence[str], pool: Sequence[str],
         m = _EDGE.search(sentence)
         if m is None:
             continue
-        where = "--prefer" if required_one else "preferences"
+        param = PREFER if required_one else None
         found = _edge_object(sentence[:m.start()], items, catalog)
         if found is None:
             if required_one:
-                raise BadInput(f"--prefer: {sentence!r} names no requested object "
+                raise _refused(param, sentence, "names no requested object "
                                f"({', '.join(i.name for i in items)})")
             continue
         item, rest = found
         if re.search(r"(?<![\w.])[-−]\s*\d", rest):
-            raise BadInput(f"{where} {sentence!r}: a distance must not be negative")
+            raise _refused(param, sentence, "a distance must not be negative")
         cm = parse_distance_cm(rest)
         if cm is None:
-            raise BadInput(f"{where} {sentence!r}: no distance from the edge, such as "
+            raise _refused(param, sentence, "no distance from the edge, such as "
                            "'3 cm from the diner's edge'")
         if cm / 100 > table.depth:
-            raise BadInput(f"{where} {sentence!r}: {cm:g} cm does not fit on the "
-                           f"{table.label}")
+            raise _refused(param, sentence, f"{cm:g} cm does not fit on the {table.label}")
         out.setdefault(item.name, cm / 100)
     return out
 
@@ -112,10 +111,22 @@ class Preferences:
     choices: tuple[Choice, ...] = ()
 
 
-def _with_gap(relation: Relation, sentence: str, where: str) -> Relation:
+#: The API parameter that holds the preferences a user states for one request.
+PREFER = "options.preferences"
+
+
+def _refused(param: str | None, sentence: str, why: str) -> BadInput:
+    """The error for ``sentence``: naming ``param`` (:data:`PREFER`) for a stated
+    preference, or as a preference of the pool (``param`` ``None``)."""
+    if param is None:
+        return BadInput(f"preference {sentence!r}: {why}")
+    return BadInput(f"{sentence!r}: {why}", param=param)
+
+
+def _with_gap(relation: Relation, sentence: str, param: str | None) -> Relation:
     """``relation`` as a preference, with the distance ``sentence`` states, if any."""
     if re.search(r"(?<![\w.])[-−]\s*\d", sentence):
-        raise BadInput(f"{where} {sentence!r}: a distance must not be negative")
+        raise _refused(param, sentence, "a distance must not be negative")
     cm = parse_distance_cm(sentence)
     return replace(relation, source="preference", gap_m=None if cm is None else cm / 100)
 
@@ -135,16 +146,16 @@ def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequen
     for sentence in required:
         parsed = parse_relations(sentence, items, catalog)
         if not (parsed.relations or parsed.choices) or parsed.ignored:
-            raise BadInput(f"--prefer: cannot read {sentence!r} as a relation between "
+            raise _refused(PREFER, sentence, "cannot read it as a relation between "
                            f"requested objects ({', '.join(i.name for i in items)})")
-        out += [_with_gap(r, sentence, "--prefer") for r in parsed.relations]
-        choices += [_choice(c, sentence, "--prefer") for c in parsed.choices]
+        out += [_with_gap(r, sentence, PREFER) for r in parsed.relations]
+        choices += [_choice(c, sentence, PREFER) for c in parsed.choices]
     everything: tuple[Item, ...] | None = None
     for sentence in pool:
         parsed = parse_relations(sentence, items, catalog)
         if (parsed.relations or parsed.choices) and not parsed.ignored:
-            out += [_with_gap(r, sentence, "preference") for r in parsed.relations]
-            choices += [_choice(c, sentence, "preference") for c in parsed.choices]
+            out += [_with_gap(r, sentence, None) for r in parsed.relations]
+            choices += [_choice(c, sentence, None) for c in parsed.choices]
             continue
         # Not about the requested objects; it must still read as a relation at all.
         everything = everything or items_from_names(catalog.names(), catalog)
@@ -155,8 +166,8 @@ def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequen
     return Preferences(combine((), out), tuple(choices))
 
 
-def _choice(choice: Choice, sentence: str, where: str) -> Choice:
-    return Choice(tuple(tuple(_with_gap(r, sentence, where) for r in option)
+def _choice(choice: Choice, sentence: str, param: str | None) -> Choice:
+    return Choice(tuple(tuple(_with_gap(r, sentence, param) for r in option)
                         for option in choice.options), choice.words)
 
 

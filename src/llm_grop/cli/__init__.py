@@ -9,6 +9,8 @@ import click
 
 from llm_grop.cli.arrange import arrange
 from llm_grop.cli.bench import bench
+from llm_grop.cli.doctor import doctor
+from llm_grop.cli.flags import reworded
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
 from llm_grop.cli.plugins import plugins
@@ -37,6 +39,7 @@ cli.add_command(ratings)
 cli.add_command(schema)
 cli.add_command(plugins)
 cli.add_command(serve)
+cli.add_command(doctor)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -55,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
         click.echo(f"llm-grop: error: {where}{exc.format_message()}", err=True)
         return 2
     except LLMGropError as exc:
-        click.echo(f"llm-grop: error: {exc}", err=True)
+        click.echo(f"llm-grop: error: {reworded(exc)}", err=True)
         return exc.exit_code
     except OSError as exc:
         click.echo(f"llm-grop: error: {exc.filename or ''}: {exc.strerror or exc}", err=True)

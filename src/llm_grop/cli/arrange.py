@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from llm_grop.cli.execution import cache_flags, cache_setting
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
@@ -34,11 +35,13 @@ from llm_grop.world.table import Table
 @click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write a top-down PNG of the table here.")
 @llm_flags
+@cache_flags
 @NO_GUESS
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def arrange(request: str | None, task: int | None, table: Table | None, seed: int,
             json_path: Path | None, image_path: Path | None, record_path: Path | None,
-            catalog_files: tuple[Path, ...], quiet: bool, no_guess: bool, **flags: Any) -> None:
+            catalog_files: tuple[Path, ...], quiet: bool, no_guess: bool,
+            cache_dir: Path | None, no_cache: bool, **flags: Any) -> None:
     """Arrange the objects of REQUEST on the table (paper §III-A, §III-B).
 
     REQUEST is in your own words ("a plate with a fork on its left", "breakfast for
@@ -54,6 +57,7 @@ def arrange(request: str | None, task: int | None, table: Table | None, seed: in
     llm_options, options = llm_settings(**flags)
     # Every output is checked before the LLM is paid for.
     check_outputs(json=json_path, image=image_path, record=record_path)
+    cache = cache_setting(cache_dir, no_cache)
     out = Console()
     err = Console(stderr=True)
     with err.status("starting", spinner="dots") as status:
@@ -64,7 +68,7 @@ def arrange(request: str | None, task: int | None, table: Table | None, seed: in
         result = api_arrange(request, task=task, llm=flags["backend"], llm_options=llm_options,
                              table=table if table is not None else Table(), seed=seed,
                              catalog_files=catalog_files, options=options, record=record_path,
-                             on_event=on_event, guess=not no_guess)
+                             on_event=on_event, guess=not no_guess, cache=cache)
     with StagedOutputs() as outputs:
         outputs.write("json", json_path,
                       lambda p: write_json(p, arrangement_to_dict(result.arrangement)))

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, overload
 
 import click
 
+from llm_grop.cli.execution import execution_flags, execution_settings
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
@@ -21,8 +22,6 @@ from llm_grop.cli.options import (
     TRUTH,
     attempt_flags,
     check_out_dir,
-    execution_flags,
-    execution_settings,
     llm_flags_without_record,
     llm_settings,
 )
@@ -72,9 +71,11 @@ def parse_methods(text: str) -> tuple[str, ...]:
     try:
         names = tuple(dict.fromkeys(get_method(m).name for m in text.split(",") if m.strip()))
     except BadInput as exc:
-        raise BadInput(str(exc).replace("--method:", "--methods:", 1)) from None
+        if exc.param != "method":
+            raise
+        raise BadInput(exc.detail, param="methods") from None
     if not names:
-        raise BadInput("--methods: no method given")
+        raise BadInput("no method given", param="methods")
     return names
 
 
@@ -94,12 +95,19 @@ def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
             try:
                 check(scene, items)
             except BadInput as exc:
-                raise BadInput(f"task {t}: {exc}") from None
+                raise _for_task(t, exc) from None
         if options.preferences or options.preference_pool:
             try:
                 read_preferences(options.preferences, options.preference_pool, items, catalog)
             except BadInput as exc:
-                raise BadInput(f"task {t}: {exc}") from None
+                raise _for_task(t, exc) from None
+
+
+def _for_task(task: int, exc: BadInput) -> BadInput:
+    """``exc`` said of the paper's task ``task``, naming the same parameter."""
+    if exc.param is None:
+        return BadInput(f"task {task}: {exc}")
+    return BadInput(f"task {task}: {exc.detail}", param=exc.param, value=exc.value)
 
 
 @click.command(epilog=EPILOG)
@@ -185,6 +193,7 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
     from llm_grop.llm.registry import BACKENDS, create_llm
     from llm_grop.methods.registry import get_method
     from llm_grop.planning.feasibility import feasibility_profile
+    from llm_grop.planning.utility import GropOptions
     from llm_grop.simulation.registry import create_simulator
     from llm_grop.world.scene_file import load_scene, set_target_top
     from llm_grop.world.tasks import load_tasks
@@ -208,6 +217,7 @@ def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_d
     # are written canonically into the experiment's identity.
     sim = create_simulator(simulator, grasp=grasp, truth=truth)
     feasibility_profile(feasibility)
+    GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w)  # each trial makes its own
     if not no_images and hasattr(sim, "check_rendering"):
         sim.check_rendering()  # a simulator that renders says now if it cannot
     backend = BACKENDS.key(flags["backend"])

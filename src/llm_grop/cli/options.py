@@ -24,14 +24,28 @@ EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
 
 F = TypeVar("F", bound=Callable[..., Any])
 
-_LLM_OPTIONS = [
-    click.option("--llm", "backend", default="embedded", show_default=True,
-                 help="LLM backend: embedded, openai, replay, or a plugin's "
-                      "(see `llm-grop plugins`)."),
+#: How to reach a backend: ``llm-grop serve`` takes these too.
+_BACKEND_OPTIONS = [
     click.option("--model", help="Model name (openai) or GGUF path (embedded)."),
     click.option("--base-url", help="OpenAI-compatible endpoint (default: $OPENAI_BASE_URL)."),
     click.option("--replay", "replay_path", type=click.Path(dir_okay=False, path_type=Path),
                  help="JSONL of recorded calls, for --llm replay."),
+    click.option("--timeout", "timeout_s", default=60.0, show_default=True,
+                 type=click.FloatRange(0, min_open=True),
+                 help="Seconds one LLM call may take, retries and their waits included."),
+    click.option("--max-answer-bytes", default=1024 * 1024, show_default=True,
+                 type=click.IntRange(1),
+                 help="The largest LLM answer accepted, bytes (openai); a larger one is an "
+                      "error."),
+    click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
+                 help="Retries on transient LLM errors (connection, 429, 5xx)."),
+]
+
+_LLM_OPTIONS = [
+    click.option("--llm", "backend", default="embedded", show_default=True,
+                 help="LLM backend: embedded, openai, replay, or a plugin's "
+                      "(see `llm-grop plugins`)."),
+    *_BACKEND_OPTIONS,
     _RECORD := click.option("--record", "record_path",
                             type=click.Path(dir_okay=False, path_type=Path),
                             help="Append every LLM call to this JSONL file."),
@@ -61,15 +75,6 @@ _LLM_OPTIONS = [
                  help="Penalty on tokens by how often they appeared (OpenAI's meaning)."),
     click.option("--presence-penalty", default=0.0, show_default=True, type=float,
                  help="Penalty on tokens that appeared at all (OpenAI's meaning)."),
-    click.option("--timeout", "timeout_s", default=60.0, show_default=True,
-                 type=click.FloatRange(0, min_open=True),
-                 help="Seconds one LLM call may take, retries and their waits included."),
-    click.option("--max-answer-bytes", default=1024 * 1024, show_default=True,
-                 type=click.IntRange(1),
-                 help="The largest LLM answer accepted, bytes (openai); a larger one is an "
-                      "error."),
-    click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
-                 help="Retries on transient LLM errors (connection, 429, 5xx)."),
 ]
 
 
@@ -283,6 +288,23 @@ NO_GUESS = click.option(
          "(a meal, 'coffee'), or how many.")
 
 
+def backend_flags(f: F) -> F:
+    """Add the flags that say how to reach a backend (``--model``, ``--base-url``, ...)."""
+    for option in reversed(_BACKEND_OPTIONS):
+        f = option(f)
+    return f
+
+
+def backend_options(model: str | None, base_url: str | None, replay_path: Path | None,
+                    timeout_s: float, retries: int, max_answer_bytes: int, **_: Any) -> Any:
+    """The :class:`~llm_grop.llm.base.BackendOptions` of :func:`backend_flags`' flags."""
+    from llm_grop.llm.base import BackendOptions
+
+    return BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
+                          max_retries=retries, replay_path=replay_path,
+                          max_answer_bytes=max_answer_bytes)
+
+
 def llm_flags(f: F) -> F:
     """Add the LLM and arrangement flags to a command."""
     for option in reversed(_LLM_OPTIONS):
@@ -306,7 +328,7 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
                  max_answer_bytes: int = 1024 * 1024, **_: Any) -> tuple[Any, Any]:
     """``(BackendOptions, ArrangeOptions)`` from the flags of :func:`llm_flags`."""
     from llm_grop.arrangement.pipeline import ArrangeOptions
-    from llm_grop.llm.base import BackendOptions, SamplingParams
+    from llm_grop.llm.base import SamplingParams
 
     if BACKENDS.key(backend) == "replay" and replay_path is None:
         raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
@@ -317,9 +339,8 @@ def llm_settings(backend: str, model: str | None, base_url: str | None,
     options = ArrangeOptions(m=m, max_attempts=attempts, examples="" if zero_shot else None,
                              notes=notes, params=params, preferences=tuple(prefer),
                              preference_pool=pool)
-    llm_options = BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
-                                 max_retries=retries, replay_path=replay_path,
-                                 max_answer_bytes=max_answer_bytes)
+    llm_options = backend_options(model, base_url, replay_path, timeout_s, retries,
+                                  max_answer_bytes)
     return llm_options, options
 
 
@@ -331,71 +352,3 @@ def check_request(command: str, request: str | None, task: int | None) -> None:
         raise BadInput("request: empty; name the objects, e.g. "
                        "'a dinner plate, a dinner fork and a dinner knife'")
 
-
-_EXECUTION_OPTIONS = [
-    click.option("--executor", default="local", show_default=True,
-                 help="Where trials run: local (processes on this machine) or ray (Ray "
-                      "tasks; needs `pip install 'llm-grop[ray]'`)."),
-    click.option("--workers", type=click.IntRange(1),
-                 help="Trials at once: local processes, or Ray tasks in flight [default: 1 "
-                      "locally; under Ray the cluster's CPUs over --cpus-per-trial]."),
-    click.option("--ray-address", metavar="ADDR",
-                 help="The Ray cluster to join, e.g. ray://head:10001 or auto [default: "
-                      "$RAY_ADDRESS, else a cluster started on this machine]."),
-    click.option("--cpus-per-trial", default=1.0, show_default=True,
-                 type=click.FloatRange(0, min_open=True),
-                 help="CPUs a Ray task reserves; below 1 lets trials that wait on a remote "
-                      "LLM share a CPU."),
-    click.option("--llm-threads", type=click.IntRange(1),
-                 help="The embedded model's CPU threads in each worker [default: the cores "
-                      "over --workers locally, 1 under Ray]."),
-    click.option("--cache-dir", type=click.Path(file_okay=False, path_type=Path),
-                 help="The shared LLM answer cache [default: $LLM_GROP_CACHE_DIR, else "
-                      "~/.cache/llm-grop/llm-calls]."),
-    click.option("--no-cache", is_flag=True,
-                 help="Ask the LLM every call, without the shared answer cache."),
-    click.option("--max-failed", type=click.IntRange(1),
-                 help="Stop once this many trials got no LLM answer after their retries "
-                      "(the server is down) [default: never; such trials are recorded "
-                      "llm-failed, and a rerun retries them]."),
-]
-
-
-def execution_flags(f: F) -> F:
-    """Add the flags that say where trials run and how LLM answers are cached."""
-    for option in reversed(_EXECUTION_OPTIONS):
-        f = option(f)
-    return f
-
-
-def execution_settings(executor: str, workers: int | None, ray_address: str | None,
-                       cpus_per_trial: float, llm_threads: int | None, cache_dir: Path | None,
-                       no_cache: bool, **_: Any) -> tuple[Any, int, str | None]:
-    """``(executor, embedded model threads, LLM cache directory or None)`` from the flags
-    of :func:`execution_flags`; the executor is built (Ray is imported) only for ``ray``."""
-    from llm_grop.experiment.executors import (
-        EXECUTORS,
-        ExecutorOptions,
-        create_executor,
-        default_threads,
-    )
-    from llm_grop.llm.cache import DEFAULT_DIR, ENV_DIR, default_dir
-
-    name = EXECUTORS.key(executor)
-    if ray_address is not None and name != "ray":
-        raise BadInput("--ray-address: only with --executor ray")
-    made = create_executor(name, ExecutorOptions(workers=workers, address=ray_address,
-                                                 cpus_per_trial=cpus_per_trial))
-    threads = llm_threads or default_threads(name, workers)
-    if no_cache:
-        return made, threads, None
-    if cache_dir is not None:
-        check_out_dir("cache_dir", cache_dir)
-        return made, threads, str(cache_dir.expanduser().absolute())
-    try:
-        check_out_dir("cache_dir", default_dir())
-    except BadInput as exc:
-        log.warning("no LLM cache: the default %s", str(exc).removeprefix("--cache-dir "))
-        return made, threads, None
-    # As written, not expanded: each node of a cluster finds its own home's cache.
-    return made, threads, os.environ.get(ENV_DIR) or str(DEFAULT_DIR)

@@ -65,8 +65,12 @@ def create(bench_dir: Path, db: Path, name: str | None, seed: int) -> None:
             bar, completed=k, total=n))
     info = create_study(db, items, name=name or bench_dir.resolve().name,
                         source=str(bench_dir), seed=seed)
-    click.echo(f"Study '{info.name}': {info.items} pictures of tasks "
-               f"{', '.join(map(str, info.tasks))} by {len(info.methods)} methods, in {db}")
+    from llm_grop.ratings.report import counted
+
+    click.echo(f"Study '{info.name}': {counted(info.items, 'picture')} of "
+               f"{'task' if len(info.tasks) == 1 else 'tasks'} "
+               f"{', '.join(map(str, info.tasks))} by {counted(len(info.methods), 'method')}, "
+               f"in {db}")
     click.echo(f"Next: llm-grop ratings invite --db {db} --count 5")
 
 
@@ -171,7 +175,7 @@ def report(db: Path, out_dir: Path) -> None:
     _extra("jinja2")
     from rich.console import Console
 
-    from llm_grop.experiment.summary import print_summary
+    from llm_grop.experiment.summary import rich_table
     from llm_grop.ratings.db import connect
     from llm_grop.ratings.report import human_report, sections, write_report
 
@@ -187,7 +191,8 @@ def report(db: Path, out_dir: Path) -> None:
     out = Console()
     s = sections(result)
     out.print(s["headline"])
-    print_summary(result.summary, out, with_se=True)
+    out.print(rich_table("Results per method (mean ± standard error)", *s["per_method"]))
+    out.print(rich_table("Mean rating (1-5) per task, ± SE", *s["per_task"], left=0))
     for k, v in s["agreement"]:
         out.print(f"{k}: {v}")
     out.print(f"Wrote {len(written)} files to {out_dir}")

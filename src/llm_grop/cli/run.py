@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from llm_grop.cli.execution import cache_flags, cache_setting
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
@@ -59,8 +60,13 @@ from llm_grop.world.table import Table
               help="3D simulators: write an offscreen render of the room and the robot.")
 @click.option("--video", "video_path", type=click.Path(dir_okay=False, path_type=Path),
               help="--simulator mujoco: write an MP4 video of the episode.")
+@click.option("--camera", metavar="NAME",
+              help="--simulator mujoco: the camera of --table-image and --video: top-down, "
+                   "diner, robot or room [default: top-down for the table render, room for "
+                   "the video].")
 @attempt_flags
 @llm_flags
+@cache_flags
 @NO_GUESS
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def run(request: str | None, task: int | None, scene_path: Path | None, method: str, seed: int,
@@ -68,9 +74,10 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
         truth: str | None, feasibility: str, w: float, fidelity_w: float,
         json_path: Path | None,
         image_path: Path | None, table_image: Path | None, room_image: Path | None,
-        video_path: Path | None, record_path: Path | None, catalog_files: tuple[Path, ...],
+        video_path: Path | None, camera: str | None, record_path: Path | None,
+        catalog_files: tuple[Path, ...],
         quiet: bool, no_guess: bool, nav_attempts: int, manip_attempts: int | None,
-        **flags: Any) -> None:
+        cache_dir: Path | None, no_cache: bool, **flags: Any) -> None:
     """Set the table in a simulated dining room: arrange, plan, execute (paper §III-C)."""
     from rich.console import Console
 
@@ -86,12 +93,16 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
     # Every output is checked before the LLM is paid for or any planning is done.
     check_outputs(json=json_path, image=image_path, table_image=table_image,
                   room_image=room_image, video=video_path, record=record_path)
+    if camera is not None and not (table_image or video_path):
+        raise BadInput("--camera: needs --table-image or --video (--room-image always "
+                       "uses the room camera)")
+    cache = cache_setting(cache_dir, no_cache)
     err = Console(stderr=True)
     with StagedOutputs() as outputs:
         # The video is recorded beside its place and moved there with the other outputs.
         video_tmp = outputs.path("video", video_path) if video_path is not None else None
         sim = _simulator(simulator, table_image or room_image or video_path, video_tmp,
-                         grasp, truth)
+                         grasp, truth, camera)
         with err.status("starting", spinner="dots") as status:
             def on_event(message: str) -> None:
                 if not quiet:
@@ -103,7 +114,7 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
                              options=options, record=record_path,
                              planner=GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w),
                              simulator=sim, feasibility=feasibility,
-                             on_event=on_event, guess=not no_guess,
+                             on_event=on_event, guess=not no_guess, cache=cache,
                              execution=ExecutionPolicy(nav_attempts=nav_attempts,
                                                        manip_attempts=manip_attempts))
         outputs.write("json", json_path, lambda p: write_json(p, run_to_dict(result)))
@@ -130,12 +141,16 @@ def run(request: str | None, task: int | None, scene_path: Path | None, method: 
 
 
 def _simulator(name: str, pictures: object, video: Path | None, grasp: str = "fix",
-               truth: str | None = None) -> Any:
+               truth: str | None = None, camera: str | None = None) -> Any:
     """The simulator to run: ``name`` from the registry, holding with ``grasp`` (MuJoCo)
-    or drawing from ``truth`` (2D); with pictures or a video it must render (MuJoCo), and
-    rendering is checked before any work."""
+    or drawing from ``truth`` (2D); with pictures or a video it must render (MuJoCo) from
+    ``camera``, and rendering is checked before any work."""
     from llm_grop.simulation.registry import SIMULATORS, create_simulator
 
+    if camera is not None:
+        from llm_grop.simulation.mujoco.options import check_camera
+
+        check_camera(camera)
     if not pictures or truth is not None:
         if grasp == "fix" and truth is None:
             return name
@@ -154,4 +169,5 @@ def _simulator(name: str, pictures: object, video: Path | None, grasp: str = "fi
         check_video_path(video)
     check_rendering()
     return MujocoSimulator(MujocoOptions(video_path=str(video) if video else None,
-                                         grasp=grasp))  # type: ignore[arg-type]
+                                         grasp=grasp,  # type: ignore[arg-type]
+                                         camera=camera))  # type: ignore[arg-type]

@@ -5,11 +5,12 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import click
 
 from llm_grop.cli.logs import VERBOSE
-from llm_grop.cli.options import EPILOG, check_out_dir
+from llm_grop.cli.options import EPILOG, backend_flags, backend_options, check_out_dir
 from llm_grop.errors import BadInput
 
 
@@ -27,14 +28,7 @@ def _default_db() -> Path:
 @click.option("--llm", "backends", multiple=True, default=("embedded",), show_default=True,
               help="An LLM backend clients may choose by name (repeatable; the first is the "
                    "default): embedded, openai, replay, or a plugin's.")
-@click.option("--model", help="Model name (openai) or GGUF path (embedded).")
-@click.option("--base-url", help="OpenAI-compatible endpoint (default: $OPENAI_BASE_URL).")
-@click.option("--replay", "replay_path", type=click.Path(dir_okay=False, path_type=Path),
-              help="JSONL of recorded calls, for --llm replay.")
-@click.option("--timeout", "timeout_s", default=60.0, show_default=True, type=float,
-              help="Seconds per LLM request.")
-@click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
-              help="Retries on transient LLM errors (connection, 429, 5xx).")
+@backend_flags
 @click.option("--workers", default=2, show_default=True, type=click.IntRange(1, 64),
               help="Worker processes that run jobs.")
 @click.option("--llm-threads", type=click.IntRange(1),
@@ -54,10 +48,10 @@ def _default_db() -> Path:
               help="Runs one client address may have waiting or running; more get 429.")
 @click.option("--openapi", is_flag=True,
               help="Print the OpenAPI document (docs/schema/openapi.json) and exit.")
-def serve(host: str, port: int, backends: tuple[str, ...], model: str | None,
-          base_url: str | None, replay_path: Path | None, timeout_s: float, retries: int,
+def serve(host: str, port: int, backends: tuple[str, ...], replay_path: Path | None,
           workers: int, llm_threads: int | None, db: Path | None, token: str | None,
-          run_time_s: float, queue: int, runs_per_client: int, openapi: bool) -> None:
+          run_time_s: float, queue: int, runs_per_client: int, openapi: bool,
+          **flags: Any) -> None:
     """Serve the JSON API (/v1/) and the playground page (/) over HTTP.
 
     Needs `pip install 'llm-grop[serve]'`. The LLM backends and their keys stay on the
@@ -70,7 +64,6 @@ def serve(host: str, port: int, backends: tuple[str, ...], model: str | None,
     except ImportError as exc:
         raise BadInput(f"serve: needs the serve extra (pip install 'llm-grop[serve]'): "
                        f"{exc.name} is missing") from None
-    from llm_grop.llm.base import BackendOptions
     from llm_grop.llm.registry import BACKENDS
     from llm_grop.service.config import Backend, Limits, ServiceConfig, check_bind
 
@@ -80,9 +73,8 @@ def serve(host: str, port: int, backends: tuple[str, ...], model: str | None,
         raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
     if replay_path is not None and not replay_path.is_file():
         raise BadInput(f"--replay {replay_path}: no such file")
-    options = BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
-                             max_retries=retries,
-                             replay_path=replay_path.absolute() if replay_path else None)
+    options = backend_options(
+        replay_path=replay_path.absolute() if replay_path else None, **flags)
     db = (db or _default_db()).expanduser().absolute()
     check_out_dir("db", db.parent)
     db.parent.mkdir(parents=True, exist_ok=True)  # checked above: it can be made

@@ -10,16 +10,14 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from llm_grop.cli.bench import TrialProgress, bench, prepare_experiment
+from llm_grop.cli.execution import execution_flags, execution_settings
 from llm_grop.cli.logs import VERBOSE
-from llm_grop.cli.options import EPILOG, check_out_dir, execution_flags, execution_settings
+from llm_grop.cli.options import EPILOG, check_out_dir
 from llm_grop.errors import BadInput
 from llm_grop.world.table import Table
 
 if TYPE_CHECKING:
     from llm_grop.experiment.sweep import Values
-
-#: The file in a sweep's directory that marks it as one.
-MARKER = "sweep.json"
 
 #: The bench flag behind each sweep file field, for messages about a cell.
 _FIELDS = {"--tasks": "tasks", "--methods": "methods", "--trials": "trials",
@@ -28,6 +26,9 @@ _FIELDS = {"--tasks": "tasks", "--methods": "methods", "--trials": "trials",
            "--model": "llm.model", "--base-url": "llm.base_url", "--replay": "llm.replay",
            "--scene": "scene", "--preferences": "preferences"}
 _FLAG = re.compile(r"^(--[a-z-]+)\b")
+#: The sweep file field behind each API parameter an error may name, where they differ.
+_PARAMS = {"method": "methods", "planner.w": "weight",
+           "planner.fidelity_w_s_per_cm": "fidelity_weight", "llm": "llm.backend"}
 
 
 def bench_params(values: Values, base: Path) -> dict[str, Any]:
@@ -75,7 +76,12 @@ def bench_defaults() -> dict[str, Any]:
 
 
 def _in_file(exc: BadInput, where: str) -> BadInput:
-    """``exc`` about a bench flag, said of the sweep file's field instead."""
+    """``exc`` about a bench flag or an API parameter, said of the sweep file's field
+    instead."""
+    if exc.param is not None:
+        field = _PARAMS.get(exc.param, exc.param)
+        named = field if exc.value is None else f"{field} {exc.value}"
+        return BadInput(f"{where}: {named}: {exc.detail}")
     text = _FLAG.sub(lambda m: _FIELDS.get(m.group(1), m.group(1)), str(exc), count=1)
     return BadInput(f"{where}: {text}")
 
@@ -98,7 +104,7 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
     from llm_grop.experiment.executors import describe
     from llm_grop.experiment.runner import Cell, run_cells
     from llm_grop.experiment.summary import rich_table
-    from llm_grop.experiment.sweep import load_sweep
+    from llm_grop.experiment.sweep import MARKER, load_sweep
     from llm_grop.experiment.sweep_report import sweep_rows, write_sweep_reports
     from llm_grop.world.jsonio import write_json
 

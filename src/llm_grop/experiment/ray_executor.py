@@ -79,10 +79,11 @@ class RayExecutor:
         try:
             import ray
         except ImportError:
-            raise BadInput("--executor ray: Ray is not installed; install it with "
-                           "pip install 'llm-grop[ray]'") from None
+            raise BadInput("Ray is not installed; install it with pip install "
+                           "'llm-grop[ray]'", param="executor", value="ray") from None
         if options.cpus_per_trial <= 0:
-            raise BadInput(f"--cpus-per-trial: must be above 0, got {options.cpus_per_trial:g}")
+            raise BadInput(f"must be above 0, got {options.cpus_per_trial:g}",
+                           param="cpus_per_trial")
         self._ray = ray
         self.options = options
         self.workers = options.workers
@@ -180,8 +181,8 @@ class RayExecutor:
                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         except (ConnectionError, RuntimeError, ValueError) as exc:
             where = f"the Ray cluster at {address}" if address else "a local Ray cluster"
-            raise BadInput(f"--executor ray: cannot reach {where}: "
-                           f"{' '.join(str(exc).split())[:200]}") from None
+            raise BadInput(f"cannot reach {where}: {' '.join(str(exc).split())[:200]}",
+                           param="executor", value="ray") from None
         return True
 
     def _result(self, ref: Any, job: Job) -> Done:

@@ -148,16 +148,17 @@ def prepare_dir(out: Path, exp: Experiment) -> None:
         try:
             theirs = json.loads(marker.read_text(encoding="utf-8"))
         except (OSError, ValueError):
-            raise BadInput(f"--out {out}: {IDENTITY} is unreadable; choose another "
-                           "directory") from None
+            raise BadInput(f"{IDENTITY} is unreadable; choose another directory",
+                           param="out", value=out) from None
         diff = sorted(k for k in mine.keys() | theirs.keys() if mine.get(k) != theirs.get(k))
         if diff:
-            raise BadInput(f"--out {out}: holds another experiment's results (different "
-                           f"{', '.join(diff)}); choose another directory")
+            raise BadInput("holds another experiment's results (different "
+                           f"{', '.join(diff)}); choose another directory", param="out",
+                           value=out)
         return
     if out.exists() and any(out.iterdir()):
-        raise BadInput(f"--out {out}: not empty and holds no {IDENTITY}; choose an empty "
-                       "or new directory")
+        raise BadInput(f"not empty and holds no {IDENTITY}; choose an empty or new "
+                       "directory", param="out", value=out)
     out.mkdir(parents=True, exist_ok=True)
     write_json(marker, mine)
 
@@ -263,7 +264,7 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
     held: list[int] = []
     try:
         for cell in cells:
-            held.append(locking.hold(cell.out / LOCK, f"--out {cell.out}",
+            held.append(locking.hold(cell.out / LOCK, "out", cell.out,
                                      "another llm-grop run on this directory"))
         return _run_locked(cells, executor, registered, on_start, on_row, keep_rows,
                            max_failed)
@@ -315,9 +316,9 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
                 failed.append(row)
                 if max_failed is not None and len(failed) >= max_failed:
                     raise LLMUnavailable(
-                        f"--max-failed {max_failed}: {len(failed)} trials got no LLM answer "
-                        f"(the last: {row.reason}); stopped early, every finished trial "
-                        "is saved; rerun to retry them")
+                        f"{len(failed)} trials got no LLM answer (the last: {row.reason}); "
+                        "stopped early, every finished trial is saved; rerun to retry them",
+                        param="max_failed", value=max_failed)
     except KeyboardInterrupt:
         interrupted = True
     finally:

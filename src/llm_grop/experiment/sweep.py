@@ -21,28 +21,58 @@ for the cell's directory), ``preferences`` and ``images``. A key left out takes 
 bench's default. Paths are relative to the sweep file. Each cell is an experiment
 directory named after its grid values (``chairs=4,table=round_1.2m``), resumable and
 refused if it holds another experiment's results, as ``llm-grop bench --out`` is.
+
+One value stands for a list of one: ``tasks: 3`` is ``tasks: [3]``, and in ``grid``
+``chairs: 4`` is ``chairs: [4]`` (a grid key of one value still names the cells). In
+``grid``, ``tasks: [1, 2]`` is two cells, one per task; a cell of several tasks is a list
+in the list (``tasks: [[1, 2], paper]``) or text (``tasks: ['1,2', paper]``). The other
+top-level keys take one value: a list there is refused with a pointer to ``grid``.
+
+A mistake is one line naming the file and the field in plain words: ``s.yaml: trials:
+expected a whole number, got 'two'``, ``s.yaml: grid.chiars: unknown key; did you mean
+'chairs'?``.
 """
 
 from __future__ import annotations
 
 import itertools
+import json
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    create_model,
+    field_validator,
+)
 
 from llm_grop.errors import BadInput
 from llm_grop.world.datafile import load_yaml_model
 
 #: Longest cell directory name, in characters (a file system allows 255 bytes).
 MAX_NAME = 120
+#: The file in a sweep's directory that marks it as one and lists its cells.
+MARKER = "sweep.json"
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
 
 Text = Annotated[str, Field(min_length=1, max_length=500)]
+
+
+def _one_task(value: Any) -> Any:
+    """``tasks: 3`` read as ``tasks: [3]``: one task id is a list of one."""
+    return [value] if isinstance(value, int) and not isinstance(value, bool) else value
+
+
+#: Tasks as the bench's ``--tasks`` text (``paper``, ``1-8``, ``1,3``), or a list of ids.
+Tasks = Annotated[Text | list[Annotated[int, Field(ge=0)]], BeforeValidator(_one_task)]
 
 
 class LLMEntry(BaseModel):
@@ -74,7 +104,7 @@ class Values(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    tasks: Text | list[Annotated[int, Field(ge=0)]] | None = None
+    tasks: Tasks | None = None
     methods: Text | list[Text] | None = None
     trials: Annotated[int, Field(ge=1)] | None = None
     seed: Annotated[int, Field(ge=0)] | None = None
@@ -90,11 +120,18 @@ class Values(BaseModel):
     images: bool | None = None
 
 
+def _as_list(value: Any) -> Any:
+    """A grid key's single value read as a list of one (``chairs: 4`` is ``chairs: [4]``);
+    ``null`` stays, to be refused as no values."""
+    return value if value is None or isinstance(value, list) else [value]
+
+
 def _grid_field(f: Any) -> tuple[Any, Any]:
-    """A :class:`Values` field as a grid key: a non-empty list of its values, each checked
-    as the field is."""
+    """A :class:`Values` field as a grid key: a non-empty list of its values (or one value,
+    a list of one), each checked as the field is."""
     one = Annotated[(f.annotation, *f.metadata)] if f.metadata else f.annotation
-    return list[one] | None, Field(None, min_length=1)  # type: ignore[valid-type]
+    return (Annotated[list[one] | None, BeforeValidator(_as_list)],  # type: ignore[valid-type]
+            Field(None, min_length=1))
 
 
 #: What ``grid`` may vary: each key of :class:`Values`, as a non-empty list of its values.
@@ -108,17 +145,15 @@ class SweepFile(Values):
 
     grid: Grid = Field(default_factory=Grid)  # type: ignore[valid-type]
 
-    @model_validator(mode="after")
-    def _set_once(self) -> SweepFile:
-        empty = [k for k in self.grid.model_fields_set if getattr(self.grid, k) is None]
-        if empty:
-            raise ValueError(f"grid.{empty[0]} has no values; give a list, or leave the key "
-                             "out")
-        both = [k for k in self.grid.model_fields_set if k in self.model_fields_set]
-        if both:
-            raise ValueError(f"{both[0]!r} is both in grid and at the top level; "
-                             "give it in one place")
-        return self
+    @field_validator(*(k for k in Values.model_fields if k not in ("tasks", "methods")),
+                     mode="before")
+    @classmethod
+    def _one_value(cls, value: Any, info: ValidationInfo) -> Any:
+        # A list at the top level is most likely meant as the grid's.
+        if isinstance(value, list):
+            raise ValueError("one value here, not a list; to run each value, put "
+                             f"{info.field_name} under grid")
+        return value
 
 
 @dataclass(frozen=True)
@@ -157,8 +192,14 @@ def load_sweep(path: Path) -> Sweep:
         raise BadInput(f"{path}: not UTF-8 text") from None
     except OSError as exc:
         raise BadInput(f"{path}: cannot read ({exc.strerror or exc})") from None
-    doc = load_yaml_model(text, str(path), SweepFile, "grid", "name")
+    doc = load_yaml_model(text, str(path), SweepFile, "", "name")
     axes = tuple(k for k in _raw_grid(text) if k in doc.grid.model_fields_set)
+    for key in axes:
+        if getattr(doc.grid, key) is None:
+            raise BadInput(f"{path}: grid.{key}: no values; give a list, or leave the key out")
+        if key in doc.model_fields_set:
+            raise BadInput(f"{path}: {key}: both in grid and at the top level; give it in one "
+                           "place")
     shared = {k: getattr(doc, k) for k in doc.model_fields_set if k != "grid"}
     cells = []
     for combo in itertools.product(*(getattr(doc.grid, k) for k in axes)):
@@ -175,6 +216,27 @@ def load_sweep(path: Path) -> Sweep:
                            "the values distinct (an llm entry takes a name)")
         seen[cell.name.casefold()] = cell
     return Sweep(path, axes, tuple(cells))
+
+
+def cell_dirs(out: Path) -> list[Path]:
+    """The cells of the sweep directory ``out`` that hold trials, in the sweep's order
+    (its :data:`MARKER` file's, then any other by name); empty for a directory that holds
+    no bench results below it."""
+    from llm_grop.experiment.runner import ROWS
+
+    named: list[str] = []
+    try:
+        doc = json.loads((out / MARKER).read_text(encoding="utf-8"))
+        named = [c["name"] for c in doc["cells"] if isinstance(c.get("name"), str)]
+    except (OSError, ValueError, LookupError, TypeError, AttributeError, RecursionError):
+        pass  # no marker, or not one this version wrote: the directories still tell
+    try:
+        found = sorted(p.name for p in out.iterdir() if p.is_dir())
+    except OSError:
+        found = []
+    names = dict.fromkeys([*named, *found])
+    return [out / n for n in names
+            if n not in ("", "..") and Path(n).name == n and (out / n / ROWS).is_file()]
 
 
 def _raw_grid(text: str) -> list[str]:

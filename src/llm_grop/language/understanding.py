@@ -204,15 +204,17 @@ def understand(text: str, catalog: Catalog, llm: CallLog | Callable[[], CallLog]
     if llm is None or not (may_name_tableware(fast.text, catalog) or typos):
         raise fast.error()
     if not guess and not fast.named and not typos:
-        raise BadInput(f"request: nothing in {fast.text!r} names an object, and --no-guess "
-                       f"forbids the LLM to choose them; name the objects to set, {EXAMPLE}")
+        raise BadInput(f"nothing in {fast.text!r} names an object, and guess=False "
+                       f"forbids the LLM to choose them; name the objects to set, {EXAMPLE}",
+                       param="request")
     log = llm if isinstance(llm, CallLog) else llm()
     read = read_with_llm(fast, catalog, log, seed, params, say)
     chosen = [o for o in read.reading.objects if o.source == "llm"]
     if chosen and not guess:
         listed = ", ".join(f"{o.count} {o.name}" for o in chosen)
-        raise BadInput(f"request: the {log.backend} LLM chose what {fast.text!r} does not "
-                       f"say ({listed}), and --no-guess forbids it; name the objects to set")
+        raise BadInput(f"the {log.backend} LLM chose what {fast.text!r} does not "
+                       f"say ({listed}), and guess=False forbids it; name the objects to set",
+                       param="request")
     return to_request(read.reading, catalog, (read.record,), read.warnings)
 
 

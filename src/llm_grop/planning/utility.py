@@ -73,10 +73,10 @@ class GropOptions:
 
     def __post_init__(self) -> None:
         if self.w < 0:
-            raise BadInput(f"planner: w must not be negative, got {self.w}")
+            raise BadInput(f"must not be negative, got {self.w}", param="planner.w")
         if not self.fidelity_w_s_per_cm >= 0 or self.fidelity_w_s_per_cm == float("inf"):
-            raise BadInput(f"--fidelity-weight: must be a finite number >= 0 (seconds per "
-                           f"centimetre), got {self.fidelity_w_s_per_cm:g}")
+            raise BadInput(f"must be a finite number >= 0 (seconds per centimetre), got "
+                           f"{self.fidelity_w_s_per_cm:g}", param="planner.fidelity_w_s_per_cm")
         if self.spacing_m <= 0 or not self.standoffs_m or min(self.standoffs_m) < 0:
             raise BadInput("planner: spacing_m must be positive and standoffs_m non-negative")
 

@@ -11,6 +11,9 @@ pictures (trials), so the standard error counts trials, not ratings. The report 
 * paired comparisons of methods on the same trials (Wilcoxon signed-rank,
   :mod:`llm_grop.experiment.paired`);
 * Fig. 3 and Fig. 5 from the human ratings, by the bench's own plotting code.
+
+A table shows only the columns that hold a figure: one whose every cell is empty (the
+planning time, which a study does not keep) is left out.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from __future__ import annotations
 import math
 import sqlite3
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from statistics import mean, median
@@ -31,8 +35,9 @@ from llm_grop.experiment.paired import PairedComparison, paired_comparisons
 from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
 from llm_grop.experiment.summary import (
     Summary,
+    Table,
+    md_row,
     summarize_outcomes,
-    summary_markdown,
     summary_tables,
     summary_to_dict,
 )
@@ -43,6 +48,8 @@ FIG3 = "fig3_rating_vs_time.png"
 FIG5 = "fig5_rating_per_task.png"
 #: The files :func:`write_report` writes into its directory.
 FILES = ("report.json", "report.md", "report.html", FIG3, FIG5)
+#: What a table's cell holds when it has no figure.
+EMPTY = ("", "-")
 
 
 @dataclass(frozen=True)
@@ -168,7 +175,8 @@ def report_to_dict(report: HumanReport) -> dict[str, Any]:
             "paired": [p.to_json() for p in report.paired]}
 
 
-def _count(n: int, noun: str) -> str:
+def counted(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 ("1 picture", "3 methods")."""
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
@@ -176,13 +184,31 @@ def _fmt(x: float, digits: int = 3) -> str:
     return "-" if math.isnan(x) else f"{x:.{digits}f}"
 
 
+def with_data(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> Table:
+    """The table ``(headers, rows)`` without the columns whose every cell is empty
+    (:data:`EMPTY`); a table without rows keeps them all."""
+    keep = [k for k in range(len(headers))
+            if not rows or any(str(r[k]).strip() not in EMPTY for r in rows)]
+    return tuple(headers[k] for k in keep), [tuple(r[k] for k in keep) for r in rows]
+
+
 def sections(report: HumanReport) -> dict[str, Any]:
-    """The report's figures as text, for the Markdown and the HTML page alike."""
+    """The report's figures as text, for the Markdown and the HTML page alike: its tables
+    (``tables``: per method, per task, and the paired comparisons) hold only the columns
+    with data."""
     a = report.automatic
+    per_method, per_task = summary_tables(report.summary, with_se=True)
+    paired = with_data(
+        ("first", "second", "shared trials", "mean difference (first - second)",
+         "95 % bootstrap CI", "Wilcoxon W", "p", "rank-biserial r"),
+        [(p.first, p.second, str(p.n), _fmt(p.mean_difference, 2),
+          "-" if math.isnan(p.ci_low) else f"[{_fmt(p.ci_low, 2)}, {_fmt(p.ci_high, 2)}]",
+          _fmt(p.statistic, 1), _fmt(p.p_value, 4), _fmt(p.effect_size, 2))
+         for p in report.paired])
     return {
-        "headline": f"{_count(report.ratings, 'rating')} of "
+        "headline": f"{counted(report.ratings, 'rating')} of "
                     f"{sum(m.trials for m in report.summary.methods)} of the "
-                    f"{_count(report.pictures, 'picture')} by {_count(report.raters, 'rater')}",
+                    f"{counted(report.pictures, 'picture')} by {counted(report.raters, 'rater')}",
         "agreement": [
             ("Krippendorff's alpha (ordinal) between raters", _fmt(report.inter_rater_alpha)),
             ("Krippendorff's alpha (ordinal), automatic rater vs human median",
@@ -190,14 +216,16 @@ def sections(report: HumanReport) -> dict[str, Any]:
             ("Spearman's rho, automatic rater vs human mean", _fmt(a.spearman)),
             ("single human ratings equal to the automatic rating", _fmt(a.exact, 2)),
             ("single human ratings within 1 of the automatic rating", _fmt(a.within_one, 2))],
-        "paired_header": ("first", "second", "shared trials", "mean difference (first - second)",
-                          "95 % bootstrap CI", "Wilcoxon W", "p", "rank-biserial r"),
-        "paired": [(p.first, p.second, str(p.n), _fmt(p.mean_difference, 2),
-                    "-" if math.isnan(p.ci_low) else
-                    f"[{_fmt(p.ci_low, 2)}, {_fmt(p.ci_high, 2)}]",
-                    _fmt(p.statistic, 1), _fmt(p.p_value, 4), _fmt(p.effect_size, 2))
-                   for p in report.paired],
+        "per_method": with_data(*per_method), "per_task": with_data(*per_task),
+        "paired_header": paired[0], "paired": paired[1],
     }
+
+
+def _md_table(table: Table, left: int) -> list[str]:
+    """``table`` as Markdown lines, its first ``left`` columns left-aligned."""
+    headers, rows = table
+    align = ["---" if k < left else "---:" for k in range(len(headers))]
+    return [md_row(headers), md_row(align), *(md_row(r) for r in rows)]
 
 
 def report_markdown(report: HumanReport) -> str:
@@ -205,14 +233,13 @@ def report_markdown(report: HumanReport) -> str:
     s = sections(report)
     lines = [f"# Human ratings: {report.study}", "", s["headline"] + ".", "",
              "Mean human rating per picture (1-5), then over pictures:", "",
-             summary_markdown(report.summary, with_se=True).rstrip("\n"), "",
+             *_md_table(s["per_method"], left=1), "",
+             "Mean rating (1-5) per task, ± SE:", "", *_md_table(s["per_task"], left=0), "",
              "## Agreement", "",
              "| figure | value |", "| --- | ---: |"]
     lines += [f"| {k} | {v} |" for k, v in s["agreement"]]
     lines += ["", "## Paired comparisons (same task and trial)", "",
-              "| " + " | ".join(s["paired_header"]) + " |",
-              "| --- | --- |" + " ---: |" * (len(s["paired_header"]) - 2)]
-    lines += ["| " + " | ".join(row) + " |" for row in s["paired"]]
+              *_md_table((s["paired_header"], s["paired"]), left=2)]
     lines += ["", f"![Fig. 3]({FIG3})", "", f"![Fig. 5]({FIG5})"]
     return "\n".join(lines) + "\n"
 
@@ -225,8 +252,7 @@ def write_report(report: HumanReport, out: Path) -> list[Path]:
     plot_rating_per_task(report.summary, out / FIG5)
     write_text(out / "report.md", report_markdown(report))
     write_text(out / "report.html", render(
-        "report.html", report=report, s=sections(report),
-        tables=summary_tables(report.summary, with_se=True), fig3=FIG3, fig5=FIG5,
+        "report.html", report=report, s=sections(report), fig3=FIG3, fig5=FIG5,
         stylesheet=(STATIC / "style.css").read_text("utf-8")))
     return [out / name for name in FILES]
 

@@ -3,9 +3,10 @@
 :func:`items_from_bench` reads a bench directory's trials and their pictures (the 3D
 render where the bench ran in MuJoCo, the drawing otherwise); :func:`create_study` writes
 them into a new database, each picture under a random id and stripped of its metadata, so
-nothing a rater sees names or hints at the method. :func:`invite` adds raters, each with an
-invite code and an order of their own, drawn from the study's seed (stage
-``ratings.order``, path: the rater's number from 0).
+nothing a rater sees names or hints at the method. A drawing loses its title band (the
+request, which the rating page shows once, as its heading, above every picture).
+:func:`invite` adds raters, each with an invite code and an order of their own, drawn from
+the study's seed (stage ``ratings.order``, path: the rater's number from 0).
 """
 
 from __future__ import annotations
@@ -21,11 +22,13 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+import numpy as np
 from PIL import Image, UnidentifiedImageError
 
 from llm_grop import seeds
 from llm_grop.errors import BadInput
 from llm_grop.experiment.runner import ROWS, read_rows
+from llm_grop.experiment.sweep import cell_dirs
 from llm_grop.language.request import parse_request
 from llm_grop.ratings.db import connect, transaction
 from llm_grop.world.catalog import Catalog
@@ -37,6 +40,10 @@ CODE_ALPHABET = "ABCDEFGHJKMNPQRSTWXYZ23456789"
 CODE_CHARS = 12
 #: At most this many raters are invited at once.
 MAX_INVITES = 1000
+#: At most this many of a sweep's cells are listed in a message.
+LISTED_CELLS = 6
+#: White space kept above a drawing's plot frame when its title band is cut off, pixels.
+TITLE_CUT_MARGIN_PX = 12
 
 
 @dataclass(frozen=True)
@@ -78,17 +85,36 @@ def _now() -> str:
     return datetime.now(UTC).isoformat(timespec="seconds")
 
 
-def clean_png(data: bytes, where: str) -> bytes:
-    """``data`` (any picture Pillow reads) as PNG with no text, time or software chunks."""
+def clean_png(data: bytes, where: str, *, drop_title: bool = False) -> bytes:
+    """``data`` (any picture Pillow reads) as PNG with no text, time or software chunks;
+    ``drop_title`` cuts off a bench drawing's title band (:func:`below_title`)."""
     try:
         with Image.open(io.BytesIO(data)) as img:
             img.load()
             pixels = img.convert("RGBA" if "A" in img.getbands() else "RGB")
     except (UnidentifiedImageError, OSError, ValueError):
         raise BadInput(f"{where}: not a picture") from None
+    if drop_title:
+        pixels = below_title(pixels)
     out = io.BytesIO()
     pixels.save(out, format="PNG", optimize=False)
     return out.getvalue()
+
+
+def below_title(img: Image.Image) -> Image.Image:
+    """``img``, a bench's drawing, from just above its plot frame down: without the title
+    and the list of objects over it. The frame is the first dark line across half the
+    picture, in its upper half (no lettering is one unbroken line); a picture without one
+    is kept whole."""
+    ink = np.asarray(img.convert("L")) < 200
+    height, width = ink.shape
+    for y in range(height // 2):
+        # The longest unbroken run of ink in the row, from where runs start and end.
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], ink[y].astype(np.int8), [0]))))
+        if edges.size and int((edges[1::2] - edges[::2]).max()) >= width // 2:
+            top = y - TITLE_CUT_MARGIN_PX
+            return img.crop((0, top, width, height)) if top > 0 else img
+    return img
 
 
 def requested_objects(row: TrialRow, where: str) -> tuple[str, ...]:
@@ -107,8 +133,15 @@ def items_from_bench(bench: Path, on_picture: Callable[[int, int], None] | None 
                      ) -> list[StudyItem]:
     """Every trial of the bench directory ``bench`` as a :class:`StudyItem`, in the
     bench's order; ``on_picture(k, n)`` after the k-th of n pictures is read. Raises
-    :class:`BadInput` for a directory without trials, or a trial without a picture."""
+    :class:`BadInput` for a directory without trials (listing the cells of a sweep's
+    directory), or a trial without a picture."""
     if not (bench / ROWS).is_file():
+        cells = cell_dirs(bench)
+        if cells:
+            more = len(cells) - LISTED_CELLS
+            raise BadInput(f"--bench {bench}: a sweep directory; choose one of its cells: "
+                           + ", ".join(map(str, cells[:LISTED_CELLS]))
+                           + (f" and {more} more" if more > 0 else ""))
         raise BadInput(f"--bench {bench}: no {ROWS}; give a directory 'llm-grop bench "
                        "--out' wrote")
     rows = read_rows(bench)
@@ -134,7 +167,9 @@ def items_from_bench(bench: Path, on_picture: Callable[[int, int], None] | None 
             task=row.task, trial=row.trial, seed=row.seed, method=row.method,
             objects=requested_objects(row, where), automatic_rating=row.rating,
             execution_time_s=row.execution_time_s, success=row.success,
-            picture=clean_png(data, f"{where}: picture {relative}"), picture_source=relative))
+            picture=clean_png(data, f"{where}: picture {relative}",
+                              drop_title=row.render is None),
+            picture_source=relative))
         if on_picture is not None:
             on_picture(len(items), len(rows))
     return items

@@ -9,18 +9,14 @@ the same bytes.
 
 from __future__ import annotations
 
-import functools
 import math
 import os
 import secrets
 import textwrap
-import zlib
 from collections.abc import Sequence
-from importlib import resources
 from pathlib import Path
 
 import matplotlib
-import yaml
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
@@ -31,6 +27,7 @@ from matplotlib.transforms import offset_copy
 
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Arrangement, Placement
+from llm_grop.world.kind_colors import TABLE_TOP, kind_color
 from llm_grop.world.relation import CENTER, STACKING
 from llm_grop.world.seat import Seat
 
@@ -42,11 +39,8 @@ PHONE_SIZE_IN = (3.6, 3.9)
 DPI = 150
 #: Colours of the page, the table top and its edge.
 BACKGROUND = "#ffffff"
-TABLE_FACE = "#eadcc3"
+TABLE_FACE = TABLE_TOP
 TABLE_EDGE = "#8a6d45"
-#: Object colours, one per kind: the picture's kinds, sorted, take them in turn.
-PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b",
-           "#e377c2", "#bcbd22", "#393b79")
 RELATION_COLOR = "#333333"
 _LABEL_BOX = {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.75,
               "edgecolor": "none"}
@@ -67,20 +61,6 @@ _SHORT_RELATION = {
 STYLE = {"font.family": "DejaVu Sans", "font.size": 9.0, "axes.linewidth": 0.8,
           "text.color": "#111111", "axes.edgecolor": "#666666", "xtick.color": "#444444",
           "ytick.color": "#444444", "axes.labelcolor": "#222222"}
-
-
-@functools.cache
-def _listed_colors() -> dict[str, str]:
-    """The kinds' colours of ``kind_colors.yaml``."""
-    text = resources.files("llm_grop.render").joinpath("kind_colors.yaml").read_text("utf-8")
-    return {str(k): str(v) for k, v in yaml.safe_load(text).items()}
-
-
-def kind_color(kind: str) -> str:
-    """The colour of ``kind`` in every picture: listed in ``kind_colors.yaml``, else a
-    palette colour picked from its name (the same in every run)."""
-    listed = _listed_colors().get(kind)
-    return listed if listed is not None else PALETTE[zlib.crc32(kind.encode()) % len(PALETTE)]
 
 
 def kind_colors(placements: Sequence[Placement]) -> dict[str, str]:

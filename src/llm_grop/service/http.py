@@ -143,5 +143,5 @@ def _host(headers: dict[bytes, bytes]) -> str:
 def hold_lock(db: Path) -> int:
     """Take the database's lock file, so that one server at a time owns its jobs; the file
     descriptor that holds it (:mod:`llm_grop.locking`)."""
-    return locking.hold(db.with_name(db.name + ".lock"), f"--db {db}",
+    return locking.hold(db.with_name(db.name + ".lock"), "db", db,
                         "another llm-grop serve")

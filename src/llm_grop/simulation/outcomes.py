@@ -50,7 +50,7 @@ class ParametricOutcomes(Curves):
     def from_profile(cls, name: str) -> ParametricOutcomes:
         """The truth of the packaged profile ``name`` (:mod:`llm_grop.world.profiles`);
         :class:`~llm_grop.errors.BadInput` for an unknown one."""
-        return cls(**asdict(load_profile(name, "--truth").curves))
+        return cls(**asdict(load_profile(name, "truth").curves))
 
     def navigation(self, clearance_m: float) -> float:
         return float(self.navigation_p(clearance_m))

@@ -40,20 +40,22 @@ def create_simulator(name: str = DEFAULT_SIMULATOR, *, grasp: str = "fix",
     the 2D draws follow) needs ``kinematic2d``."""
     if truth is not None:
         if SIMULATORS.key(name) != "kinematic2d":
-            raise BadInput(f"--truth {truth}: needs --simulator kinematic2d (got {name!r})")
+            raise BadInput(f"needs the kinematic2d simulator (got {name!r})", param="truth",
+                           value=truth)
         from llm_grop.simulation.kinematic2d import Kinematic2D, Kinematic2DOptions
         from llm_grop.simulation.outcomes import ParametricOutcomes
 
         return Kinematic2D(Kinematic2DOptions(outcomes=ParametricOutcomes.from_profile(truth)))
     if grasp != "fix":
         if SIMULATORS.key(name) != "mujoco":
-            raise BadInput(f"--grasp {grasp}: needs --simulator mujoco (got {name!r})")
+            raise BadInput(f"needs the mujoco simulator (got {name!r})", param="grasp",
+                           value=grasp)
         from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
 
         return MujocoSimulator(MujocoOptions(grasp=grasp))  # type: ignore[arg-type]
     sim: Simulator = SIMULATORS.create(name)
     key = SIMULATORS.key(name)
     if sim.name != key:
-        raise BadInput(f"--simulator: {SIMULATORS.origin(key)}: simulator {key!r} calls itself "
-                       f"{sim.name!r}; the two must agree")
+        raise BadInput(f"{SIMULATORS.origin(key)}: simulator {key!r} calls itself "
+                       f"{sim.name!r}; the two must agree", param="simulator")
     return sim

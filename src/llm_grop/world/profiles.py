@@ -125,13 +125,13 @@ def profile_names() -> list[str]:
     return sorted(_profiles())
 
 
-def load_profile(name: str, flag: str = "--feasibility") -> Profile:
-    """The packaged profile called ``name``; :class:`BadInput` naming ``flag`` for an
-    unknown one."""
+def load_profile(name: str, param: str = "feasibility") -> Profile:
+    """The packaged profile called ``name``; :class:`BadInput` naming the API parameter
+    ``param`` for an unknown one."""
     profiles = _profiles()
     if name not in profiles:
-        raise BadInput(f"{flag}: unknown profile {name!r}; choose from "
-                       f"{', '.join(sorted(profiles))}")
+        raise BadInput(f"unknown profile {name!r}; choose from "
+                       f"{', '.join(sorted(profiles))}", param=param)
     fields = profiles[name].model_dump()
     description = fields.pop("description")
     return Profile(name, description, Curves(**fields))

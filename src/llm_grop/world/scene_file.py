@@ -41,7 +41,7 @@ from shapely.geometry import Point, Polygon
 from shapely.geometry import box as rect
 
 from llm_grop.errors import BadInput
-from llm_grop.world.datafile import load_yaml_model
+from llm_grop.world.datafile import load_yaml_model, unknown_key
 from llm_grop.world.geometry2d import Box, Disc, Pose2D
 from llm_grop.world.jsonio import rounded
 from llm_grop.world.robot import Robot
@@ -144,7 +144,8 @@ def parse_scene(text: str, where: str) -> Scene:
     m = load_yaml_model(text, where, SceneFile, "tables", "name")
     typo = _unknown_key(m)
     if typo is not None:
-        raise BadInput(f"{where}: {typo}: Extra inputs are not permitted")
+        path, why = typo
+        raise BadInput(f"{where}: {path}: {why}")
 
     def fail(path: str, reason: str) -> BadInput:
         return BadInput(f"{where}: {path}: {reason}")
@@ -248,29 +249,32 @@ def set_target_top(scene: Scene, top: Table, *, keep_chairs: bool = True) -> Sce
     """``scene`` with its target table's top replaced by ``top`` (``--table``): same
     centre, yaw and height, ``top``'s size and shape.
 
-    Raises :class:`BadInput` (one line naming ``--table`` and what it hits) when the new
+    Raises :class:`BadInput` (one line naming the ``table`` parameter and what it hits) when the new
     top leaves the room or overlaps a wall, another table, the robot's start or, with
     ``keep_chairs``, one of the scene's chairs.
     """
     out = scene.with_target_top(top)
     target = out.target_table
     poly = _poly(target.footprint)
-    where = f"--table: a {top.label} as {target.name!r}"
+    what = f"a {top.label} as {target.name!r}"
+
+    def refused(why: str) -> BadInput:
+        return BadInput(f"{what} {why}", param="table")
 
     if not _inside(poly, rect(0.0, 0.0, scene.width, scene.depth)):
-        raise BadInput(f"{where} extends outside the room ({scene.width:g} x {scene.depth:g} m)")
+        raise refused(f"extends outside the room ({scene.width:g} x {scene.depth:g} m)")
     for t in out.tables:
         if t.name != target.name and _overlap(poly, _poly(t.footprint)):
-            raise BadInput(f"{where} overlaps table {t.name!r}")
+            raise refused(f"overlaps table {t.name!r}")
     for j, wall in enumerate(out.walls):
         if _overlap(poly, _poly(wall)):
-            raise BadInput(f"{where} overlaps wall {j + 1}")
+            raise refused(f"overlaps wall {j + 1}")
     for c in out.chairs if keep_chairs else ():
         if _overlap(poly, _poly(c.box)):
-            raise BadInput(f"{where} overlaps {_plain(c.name)}; sample chairs with --chairs N")
+            raise refused(f"overlaps {_plain(c.name)}; sample the chairs instead (chairs=N)")
     start = out.robot_start
     if _overlap(Point(start.x, start.y).buffer(out.robot.base_radius_m), poly):
-        raise BadInput(f"{where} covers the robot's start ({start.x:g}, {start.y:g})")
+        raise refused(f"covers the robot's start ({start.x:g}, {start.y:g})")
     return out
 
 
@@ -329,10 +333,11 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
     return out
 
 
-def _unknown_key(m: BaseModel, path: str = "") -> str | None:
-    """The path of the first key in ``m`` that the scene layout does not know, or ``None``."""
+def _unknown_key(m: BaseModel, path: str = "") -> tuple[str, str] | None:
+    """The path of the first key in ``m`` that the scene layout does not know and why it is
+    refused (with the closest known key), or ``None``."""
     for key in m.model_extra or {}:
-        return f"{path}{_plain(str(key))}"
+        return f"{path}{_plain(str(key))}", unknown_key(str(key), list(type(m).model_fields))
     for field in type(m).model_fields:
         value = getattr(m, field)
         entries = enumerate(value) if isinstance(value, list) else [(None, value)]

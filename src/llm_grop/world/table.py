@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Literal, get_args
@@ -64,19 +63,20 @@ class Table:
 
     def __post_init__(self) -> None:
         if not (0 < self.width < math.inf and 0 < self.depth < math.inf):
-            raise BadInput(f"table: size must be positive and finite, got {self.width} x "
-                           f"{self.depth} m")
+            raise BadInput(f"size must be positive and finite, got {self.width} x "
+                           f"{self.depth} m", param="table")
         if self.shape not in TABLE_SHAPES:
-            raise BadInput(f"table: shape must be one of {', '.join(TABLE_SHAPES)}, "
-                           f"got {self.shape!r}")
+            raise BadInput(f"shape must be one of {', '.join(TABLE_SHAPES)}, "
+                           f"got {self.shape!r}", param="table")
         if self.is_round and not math.isclose(self.width, self.depth, rel_tol=0.0,
                                               abs_tol=_ROUND_TOL_M):
-            raise BadInput(f"table: a round table has one size, its diameter, but was given "
-                           f"{self.width:g} x {self.depth:g} m; use [d, d]")
+            raise BadInput(f"a round table has one size, its diameter, but was given "
+                           f"{self.width:g} x {self.depth:g} m; use [d, d]", param="table")
         for k, seat in enumerate(self.diners):
             if self._inside(seat.x, seat.y):
-                raise BadInput(f"table: diner {k}'s seat at ({seat.x:+.2f}, {seat.y:+.2f}) m "
-                               f"lies inside the {self.label}; a seat goes at or beyond its edge")
+                raise BadInput(f"diner {k}'s seat at ({seat.x:+.2f}, {seat.y:+.2f}) m lies "
+                               f"inside the {self.label}; a seat goes at or beyond its edge",
+                               param="table")
 
     def _inside(self, x: float, y: float, tol: float = _SEAT_TOL_M) -> bool:
         """Whether ``(x, y)`` lies inside the top by more than ``tol`` metres."""
@@ -143,22 +143,24 @@ class Table:
         the second side applies to both. Each side must lie between
         :data:`MIN_TABLE_SIDE_M` and :data:`MAX_TABLE_SIDE_M` metres, so that a size in
         the wrong unit (``"120x80"``, 120 x 80 m) is refused with a hint rather than used.
-        Raises :class:`BadInput` (one line, naming ``--table``) otherwise.
+        Raises :class:`BadInput` (one line, naming the ``table`` parameter) otherwise.
         """
         if text.strip().lower().startswith("round"):
             m = _ROUND_TEXT.fullmatch(text)
             if not m:
-                raise BadInput(f"--table: a round table has one size, its diameter in metres: "
-                               f"round:D such as round:1.2 ({_UNITS_HELP}), got {text!r}")
+                raise BadInput(f"a round table has one size, its diameter in metres: "
+                               f"round:D such as round:1.2 ({_UNITS_HELP}), got {text!r}",
+                               param="table")
             sides = [(m.group(1), m.group(2))]
-            table = _flagged(cls.circle, *_metres(sides))
+            table = cls.circle(*_metres(sides))
         else:
             m = _RECTANGLE_TEXT.fullmatch(text)
             if not m:
-                raise BadInput(f"--table: expected WxD in metres such as 0.9x0.6, or round:D "
-                               f"such as round:1.2 ({_UNITS_HELP}), got {text!r}")
+                raise BadInput(f"expected WxD in metres such as 0.9x0.6, or round:D "
+                               f"such as round:1.2 ({_UNITS_HELP}), got {text!r}",
+                               param="table")
             sides = [(m.group(1), m.group(2)), (m.group(3), m.group(4))]
-            table = _flagged(cls, *_metres(sides))
+            table = cls(*_metres(sides))
         _check_plausible(table, sides)
         return table
 
@@ -173,8 +175,8 @@ def _units(sides: list[_Side]) -> list[str]:
     last = sides[-1][1]
     if len(sides) > 1 and sides[0][1] is not None and last is None:
         (w, unit), (d, _) = sides
-        raise BadInput(f"--table: {w}{unit}x{d} gives a unit for the first side only; "
-                       f"write {w}x{d}{unit.lower()}")
+        raise BadInput(f"{w}{unit}x{d} gives a unit for the first side only; "
+                       f"write {w}x{d}{unit.lower()}", param="table")
     return [(unit or last or "m").lower() for _, unit in sides]
 
 
@@ -209,13 +211,5 @@ def _check_plausible(table: Table, sides: list[_Side]) -> None:
             break
     what, side = (f"round {table.width:g} m", "diameter") if table.is_round else \
         (f"{table.width:g} x {table.depth:g} m", "each side")
-    raise BadInput(f"--table: {what} is not a dining table ({side} between "
-                   f"{MIN_TABLE_SIDE_M:g} and {MAX_TABLE_SIDE_M:g} m){hint}")
-
-
-def _flagged(make: Callable[..., Table], *size: float) -> Table:
-    """``make(*size)``, its :class:`BadInput` naming the ``--table`` flag."""
-    try:
-        return make(*size)
-    except BadInput as exc:
-        raise BadInput(f"--{exc}") from None
+    raise BadInput(f"{what} is not a dining table ({side} between "
+                   f"{MIN_TABLE_SIDE_M:g} and {MAX_TABLE_SIDE_M:g} m){hint}", param="table")

@@ -12,8 +12,9 @@ import numpy as np
 from llm_grop.simulation.mujoco.options import LidarOptions
 from llm_grop.world.geometry2d import Pose2D
 
-#: Geom groups the rays hit: the world's (furniture, walls, tableware), not the robot's.
-WORLD_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
+#: Geom groups the rays hit: the world's (furniture, walls, tableware: 0, and the collision
+#: shapes behind drawn looks: 4), not the robot's (2) nor what is drawn only (1).
+WORLD_GROUPS = np.array([1, 0, 0, 0, 1, 0], dtype=np.uint8)
 
 
 class Lidar:

@@ -12,6 +12,24 @@ from llm_grop.errors import BadInput
 Grasp = Literal["fix", "friction"]
 GRASPS: tuple[str, ...] = get_args(Grasp)
 
+#: The named cameras of renders and videos: ``top-down``, orthographic straight down on
+#: the target table, the diner at the bottom; ``diner``, the first diner's view from their
+#: seat at a seated person's eye height; ``robot``, the robot's head camera, which moves
+#: with it; ``room``, the whole room from above the diner's side.
+#: The apt package that gives each offscreen GL backend (``MUJOCO_GL``).
+GL_APT = {"osmesa": "libosmesa6", "egl": "libegl1 libgl1-mesa-dri"}
+
+Camera = Literal["top-down", "diner", "robot", "room"]
+CAMERAS: tuple[str, ...] = get_args(Camera)
+
+
+def check_camera(camera: str | None) -> None:
+    """:class:`BadInput` naming the cameras unless ``camera`` is one of :data:`CAMERAS` (or
+    ``None``, each picture's default)."""
+    if camera is not None and camera not in CAMERAS:
+        raise BadInput(f"unknown camera {camera!r}; choose from {', '.join(CAMERAS)}",
+                       param="camera")
+
 
 @dataclass(frozen=True)
 class LidarOptions:
@@ -91,6 +109,9 @@ class MujocoOptions:
         video_path: where to write an MP4 video of the episode (``None``: no video).
         video_frame_s: simulated seconds between two video frames.
         video_fps: frames per second of the video.
+        camera: the camera (:data:`CAMERAS`) of the table render and of the video;
+            ``None``: ``top-down`` for the table render, ``room`` for the video. The room
+            render always uses ``room``.
     """
 
     base: BaseOptions = field(default_factory=BaseOptions)
@@ -105,11 +126,13 @@ class MujocoOptions:
     video_path: str | None = None
     video_frame_s: float = 0.2
     video_fps: int = 25
+    camera: Camera | None = None
 
     def __post_init__(self) -> None:
         if self.grasp not in GRASPS:
-            raise BadInput(f"--grasp: unknown grasp {self.grasp!r}; choose from "
-                           f"{', '.join(GRASPS)}")
+            raise BadInput(f"unknown grasp {self.grasp!r}; choose from "
+                           f"{', '.join(GRASPS)}", param="grasp")
+        check_camera(self.camera)
         if self.nav_noise_var_m2 < 0 or self.heading_noise_std_rad < 0:
             raise BadInput("mujoco options: nav_noise_var_m2 and heading_noise_std_rad must "
                            "not be negative")

@@ -1,5 +1,7 @@
-"""Offscreen pictures of the MuJoCo world: the table from above, the room with the robot,
-and an episode video.
+"""Offscreen pictures of the MuJoCo world: the table (robot hidden), the room with the
+robot, and an episode video, each from a named camera
+(:data:`~llm_grop.simulation.mujoco.options.CAMERAS`): ``top-down``, ``diner``, ``robot``
+or ``room``.
 
 Rendering needs an OpenGL library without a screen: OSMesa (apt ``libosmesa6``) or EGL
 (apt ``libegl1 libgl1-mesa-dri``, software rendering works). The package picks one when it
@@ -17,15 +19,18 @@ import mujoco
 import numpy as np
 
 from llm_grop.errors import BadInput
+from llm_grop.simulation.mujoco.options import GL_APT, Camera, check_camera
 from llm_grop.simulation.mujoco.world import World
 
 View = Literal["table", "room"]
+#: Each view's camera when none is named.
+DEFAULT_CAMERA: dict[str, Camera] = {"table": "top-down", "room": "room"}
 
-#: Geom groups drawn: furniture and tableware (0), the robot (2); not sites (3).
-_GROUPS_TABLE = (1, 0, 0, 0, 0, 0)
-_GROUPS_ROOM = (1, 0, 1, 0, 0, 0)
+#: Geom groups drawn: furniture and tableware (0), what is drawn only (1: looks,
+#: placemats), the robot (2); not the collision shapes behind looks (4).
+_GROUPS_TABLE = (1, 1, 0, 0, 0, 0)
+_GROUPS_ROOM = (1, 1, 1, 0, 0, 0)
 
-_APT = {"osmesa": "libosmesa6", "egl": "libegl1 libgl1-mesa-dri"}
 
 
 def check_rendering() -> None:
@@ -52,8 +57,8 @@ def new_renderer(model: mujoco.MjModel, size: tuple[int, int]) -> mujoco.Rendere
             return mujoco.Renderer(model, height=size[1], width=size[0])
     except Exception as exc:  # noqa: BLE001 - any GL failure means the same to the user
         backend = os.environ.get("MUJOCO_GL", "").lower()
-        if backend in _APT:
-            need = f"the apt package {_APT[backend]} (MUJOCO_GL={backend})"
+        if backend in GL_APT:
+            need = f"the apt package {GL_APT[backend]} (MUJOCO_GL={backend})"
         else:
             need = ("the apt package libosmesa6 (or libegl1 and libgl1-mesa-dri), and set "
                     "MUJOCO_GL=osmesa or egl before mujoco is first imported")
@@ -61,32 +66,36 @@ def new_renderer(model: mujoco.MjModel, size: tuple[int, int]) -> mujoco.Rendere
                        f"({type(exc).__name__})") from None
 
 
-def picture(world: World, view: View, size: tuple[int, int] | None = None) -> np.ndarray:
-    """An RGB image (height x width x 3, uint8) of ``world`` now.
+def picture(world: World, view: View, size: tuple[int, int] | None = None,
+            camera: str | None = None) -> np.ndarray:
+    """An RGB image (height x width x 3, uint8) of ``world`` now, from ``camera``.
 
-    ``table``: the target table straight from above (orthographic), the diner at the
-    bottom, robot hidden, as the raters see it. ``room``: the whole room and the robot,
-    from above the diner's side.
+    ``table``: the furniture and tableware, robot hidden, as the raters see it; by default
+    from ``top-down``, the target table straight from above (orthographic), the diner at
+    the bottom. ``room``: the robot too; by default from ``room``, the whole room from
+    above the diner's side. :class:`BadInput` for an unknown camera.
     """
+    check_camera(camera)
     m = world.m
     width, height = size or (m.vis.global_.offwidth, m.vis.global_.offheight)
     renderer = new_renderer(m, (width, height))
     try:
-        return render_with(renderer, world, view)
+        return render_with(renderer, world, view, camera)
     finally:
         renderer.close()
 
 
-def render_with(renderer: mujoco.Renderer, world: World, view: View) -> np.ndarray:
-    """An RGB image of ``world`` from ``view`` with an open ``renderer`` (for frame after
-    frame, as a video needs)."""
+def render_with(renderer: mujoco.Renderer, world: World, view: View,
+                camera: str | None = None) -> np.ndarray:
+    """An RGB image of ``world`` showing ``view`` from ``camera`` (``None``: the view's
+    :data:`DEFAULT_CAMERA`) with an open ``renderer`` (for frame after frame, as a video
+    needs)."""
     option = mujoco.MjvOption()
     option.geomgroup[:] = _GROUPS_TABLE if view == "table" else _GROUPS_ROOM
     option.sitegroup[:] = 0
-    if view == "table":
-        renderer.update_scene(world.d, camera="table_top", scene_option=option)
-    else:
-        renderer.update_scene(world.d, camera=_room_camera(world), scene_option=option)
+    name = camera or DEFAULT_CAMERA[view]
+    cam = _room_camera(world) if name == "room" else name
+    renderer.update_scene(world.d, camera=cam, scene_option=option)
     return renderer.render().copy()
 
 
@@ -104,19 +113,21 @@ def _room_camera(world: World) -> mujoco.MjvCamera:
 def check_video_path(path: str | os.PathLike[str]) -> None:
     """:class:`BadInput` unless ``path`` names an MP4 file."""
     if Path(path).suffix.lower() != ".mp4":
-        raise BadInput(f"--video {path}: the video must be an .mp4 file")
+        raise BadInput("the video must be an .mp4 file", param="video_path", value=str(path))
 
 
 class VideoRecorder:
-    """Streams room views of an episode to an MP4 file (H.264 through imageio-ffmpeg):
-    pass it as the simulator's ``on_frame`` and call :meth:`close` at the end."""
+    """Streams room views of an episode (robot drawn) from ``camera`` to an MP4 file (H.264
+    through imageio-ffmpeg): pass it as the simulator's ``on_frame`` and call :meth:`close`
+    at the end."""
 
     def __init__(self, path: str | os.PathLike[str], *, fps: int = 25,
-                 size: tuple[int, int] = (640, 480)) -> None:
+                 size: tuple[int, int] = (640, 480), camera: str = "room") -> None:
         check_video_path(path)
+        check_camera(camera)
         import imageio_ffmpeg
 
-        self.path, self.size = Path(path), size
+        self.path, self.size, self.camera = Path(path), size, camera
         self._writer = imageio_ffmpeg.write_frames(str(self.path), size, fps=fps,
                                                    macro_block_size=8, quality=6)
         self._writer.send(None)
@@ -126,7 +137,8 @@ class VideoRecorder:
     def __call__(self, world: World) -> None:
         if self._renderer is None:
             self._renderer = new_renderer(world.m, self.size)
-        self._writer.send(np.ascontiguousarray(render_with(self._renderer, world, "room")))
+        self._writer.send(np.ascontiguousarray(render_with(self._renderer, world, "room",
+                                                           self.camera)))
         self.frames += 1
 
     def close(self) -> None:

@@ -85,9 +85,11 @@ class MujocoSession:
                                     self.w.support_of(name), held=held)
         return out
 
-    def picture(self, view: View = "room", size: tuple[int, int] | None = None) -> np.ndarray:
-        """An RGB image of the world now."""
-        return picture(self.w, view, size)
+    def picture(self, view: View = "room", size: tuple[int, int] | None = None,
+                camera: str | None = None) -> np.ndarray:
+        """An RGB image of the world now, from ``camera`` (``None``: the view's default;
+        see :func:`~llm_grop.simulation.mujoco.render.picture`)."""
+        return picture(self.w, view, size, camera)
 
     def close(self) -> None:
         """Finish the episode's video, if one is being recorded."""

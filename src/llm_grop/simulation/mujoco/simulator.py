@@ -35,7 +35,8 @@ __all__ = ["MujocoOptions", "MujocoSimulator"]
 
 class MujocoSimulator:
     """Runs episodes in MuJoCo. :attr:`world` holds the last episode's world and
-    :meth:`picture` renders it. ``on_frame`` is called with the world every
+    :meth:`picture` renders it from a named camera (``options.camera`` chooses the one of
+    the table render and the video). ``on_frame`` is called with the world every
     ``options.video_frame_s`` simulated seconds (a video recorder, a viewer)."""
 
     name = "mujoco"
@@ -47,13 +48,16 @@ class MujocoSimulator:
         self.world: World | None = None
         self._ik: ArmIK | None = None
 
-    def picture(self, view: View = "table", size: tuple[int, int] | None = None
-                ) -> np.ndarray:
-        """An RGB image of the last episode as it ended (see
+    def picture(self, view: View = "table", size: tuple[int, int] | None = None,
+                camera: str | None = None) -> np.ndarray:
+        """An RGB image of the last episode as it ended, from ``camera`` (``None``: for the
+        table, ``options.camera``, else each view's default; see
         :func:`~llm_grop.simulation.mujoco.render.picture`)."""
         if self.world is None:
             raise RuntimeError("nothing executed yet")
-        return picture(self.world, view, size)
+        if camera is None and view == "table":
+            camera = self.options.camera
+        return picture(self.world, view, size, camera)
 
     def check_rendering(self) -> None:
         """:class:`BadInput` naming the apt package when offscreen rendering is missing."""
@@ -76,8 +80,8 @@ class MujocoSimulator:
         o = self.options
         placements = tuple(item_placement(i) for i in items)
         world = self._world(scene, placements)
-        recorder = VideoRecorder(o.video_path, fps=o.video_fps, size=o.image_size) \
-            if o.video_path else None
+        recorder = VideoRecorder(o.video_path, fps=o.video_fps, size=o.image_size,
+                                 camera=o.camera or "room") if o.video_path else None
         if recorder is not None:
             world.on_frame = _both(self.on_frame, recorder)
         return MujocoSession(o, scene, rng, replan, world, [p.name for p in placements],

@@ -1,9 +1,11 @@
-"""Tableware as rigid bodies: what each kind is made of and how the gripper holds it.
+"""Tableware as rigid bodies: what each kind is made of, what it looks like and how the
+gripper holds it.
 
-Footprints and heights come from the plan's placements (the catalog); style, mass and
-friction come from ``assets/tableware.yaml``. All lengths in metres, masses in kilograms,
-angles in radians; an object's own frame has its origin at the centre of its footprint, on
-its bottom face, +x along the catalog's ``sx``.
+Footprints and heights come from the plan's placements (the catalog); style, mass,
+friction and look come from ``assets/tableware.yaml``, the looks themselves from
+``assets/looks.yaml`` (:mod:`llm_grop.simulation.mujoco.looks`). All lengths in metres,
+masses in kilograms, angles in radians; an object's own frame has its origin at the centre
+of its footprint, on its bottom face, +x along the catalog's ``sx``.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import mujoco
 from pydantic import BaseModel, ConfigDict, Field
 
 from llm_grop.errors import BadInput
+from llm_grop.simulation.mujoco import looks
 from llm_grop.world.arrangement import Placement
 from llm_grop.world.datafile import load_yaml_model
 
@@ -50,12 +53,14 @@ class _KindModel(BaseModel):
     style: Style
     mass: float = Field(gt=0)
     friction: tuple[float, float, float] | None = None
+    look: str | None = None
 
 
 class _DefaultModel(BaseModel):
     model_config = ConfigDict(extra="forbid")
     density: float = Field(gt=0)
     friction: tuple[float, float, float]
+    looks: dict[Style, str] = {}
 
 
 class _FileModel(BaseModel):
@@ -68,7 +73,12 @@ class _FileModel(BaseModel):
 def _table() -> _FileModel:
     text = resources.files("llm_grop.simulation.mujoco").joinpath(
         "assets/tableware.yaml").read_text(encoding="utf-8")
-    return load_yaml_model(text, "tableware.yaml", _FileModel, "kinds", "style")
+    table = load_yaml_model(text, "tableware.yaml", _FileModel, "kinds", "style")
+    named = [*table.default.looks.values(), *(k.look for k in table.kinds.values() if k.look)]
+    unknown = sorted(set(named) - set(looks.names()))
+    if unknown:
+        raise BadInput(f"tableware.yaml: looks {', '.join(unknown)} are not in looks.yaml")
+    return table
 
 
 @dataclass(frozen=True)
@@ -88,7 +98,8 @@ class Grasp:
 @dataclass(frozen=True)
 class Tableware:
     """One physical object: its catalog footprint ``size`` (metres), ``height`` (metres),
-    ``style``, ``mass`` (kg) and ``friction`` (MuJoCo's three coefficients)."""
+    ``style``, ``mass`` (kg), ``friction`` (MuJoCo's three coefficients) and ``look`` (a
+    look of ``assets/looks.yaml``; ``None``: drawn as its collision geoms)."""
 
     name: str
     kind: str
@@ -98,6 +109,7 @@ class Tableware:
     style: Style
     mass: float
     friction: tuple[float, float, float]
+    look: str | None = None
 
     @property
     def radius(self) -> float:
@@ -141,8 +153,9 @@ def tableware(p: Placement) -> Tableware:
     entry = table.kinds.get(p.kind)
     sx, sy = p.size
     h = p.height if p.height > 0 else 0.02
+    look = None
     if entry is not None:
-        style, mass = entry.style, entry.mass
+        style, mass, look = entry.style, entry.mass, entry.look
         friction = entry.friction or table.default.friction
     else:
         style = "cylinder" if p.shape == "circle" else "box"
@@ -151,7 +164,8 @@ def tableware(p: Placement) -> Tableware:
     if style != "plate" and p.shape == "circle" and sx > MAX_OPENING_M:
         style = "plate"
     t = Tableware(p.name, p.kind or p.name, p.shape, (sx, sy), h, style, mass,
-                  tuple(friction))  # type: ignore[arg-type]
+                  tuple(friction),  # type: ignore[arg-type]
+                  look or table.default.looks.get(style))
     narrow = min(sx, sy)
     too_wide = (narrow > MAX_OPENING_M and not (style == "plate" and p.shape == "circle")) \
         or (style == "plate" and sx > MAX_RIM_DIAMETER_M)
@@ -164,24 +178,30 @@ def tableware(p: Placement) -> Tableware:
     return t
 
 
-def add_body(parent: mujoco.MjsBody, t: Tableware, pos: tuple[float, float, float],
-             yaw: float, rgba: tuple[float, float, float, float]) -> mujoco.MjsBody:
-    """Add ``t`` as a free body under ``parent`` with its bottom centre at ``pos`` (metres,
-    world frame) turned by ``yaw``; its mass is spread over its geoms by volume."""
+def add_body(spec: mujoco.MjSpec, parent: mujoco.MjsBody, t: Tableware,
+             pos: tuple[float, float, float], yaw: float,
+             rgba: tuple[float, float, float, float]) -> mujoco.MjsBody:
+    """Add ``t`` to ``spec`` as a free body under ``parent`` with its bottom centre at
+    ``pos`` (metres, world frame) turned by ``yaw``, coloured ``rgba``; its mass is spread
+    over its collision geoms by volume. With a look, those are hidden
+    (:data:`~llm_grop.simulation.mujoco.looks.GROUP_COLLISION`) and the look is drawn."""
     body = parent.add_body(name=t.name, pos=list(pos),
                            quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
     body.add_freejoint(name=t.name)
+    visuals = looks.visuals(t.look, t.size, t.height) if t.look else ()
     geoms = list(_geoms(t))
     volume = sum(v for *_, v in geoms)
     for k, (gtype, size, gpos, gyaw, v) in enumerate(geoms):
         body.add_geom(name=f"{t.name}#{k}", type=gtype, size=list(size), pos=list(gpos),
                       quat=[math.cos(gyaw / 2), 0, 0, math.sin(gyaw / 2)],
                       mass=t.mass * v / volume, friction=list(t.friction), rgba=list(rgba),
-                      contype=CONTYPE, conaffinity=CONAFFINITY, group=0,
+                      contype=CONTYPE, conaffinity=CONAFFINITY,
+                      group=looks.GROUP_COLLISION if visuals else looks.GROUP_VISUAL,
                       # A berry is round: rolling friction (condim 6) keeps it where it
                       # is put, as a real strawberry's shape does.
                       condim=6 if t.style == "berry" else 4,
                       solref=[0.004, 1.0], priority=1)
+    looks.add_look(spec, body, t.name, visuals, rgba)
     return body
 
 

@@ -1,11 +1,12 @@
 """The dining room as a MuJoCo model, built from the scene with MuJoCo's model editor.
 
 The robot comes from ``assets/robot.xml``; floor, walls, tables with legs (a round one: a
-cylinder top on a pedestal), chairs with seat,
-back and legs, and the tableware are added around it. World frame = the scene's room frame
-(metres, radians), z up from the floor. Furniture is fixed to the world; tableware bodies are
-free, each with an inactive weld to the hand that a grasp switches on (see
-:mod:`llm_grop.simulation.mujoco.manipulation`).
+cylinder top on a pedestal), chairs with seat, back and legs, a placemat in front of each
+diner's seat (drawn only), and the tableware, each in its kind's colour, are added around
+it, with the named cameras (:data:`~llm_grop.simulation.mujoco.options.CAMERAS`). World
+frame = the scene's room frame (metres, radians), z up from the floor. Furniture is fixed
+to the world; tableware bodies are free, each with an inactive weld to the hand that a
+grasp switches on (see :mod:`llm_grop.simulation.mujoco.manipulation`).
 """
 
 from __future__ import annotations
@@ -17,11 +18,22 @@ from importlib import resources
 
 import mujoco
 import numpy as np
-from shapely.geometry import Point, Polygon
+from shapely.affinity import rotate, translate
+from shapely.geometry import LineString, Point, Polygon
+from shapely.geometry import box as rectangle
 
 from llm_grop.errors import BadInput
+from llm_grop.simulation.mujoco.cameras import add_cameras
+from llm_grop.simulation.mujoco.looks import (
+    GROUP_COLLISION,
+    GROUP_VISUAL,
+    Visual,
+    add_look,
+    lathe,
+)
 from llm_grop.simulation.mujoco.tableware import Tableware, add_body
 from llm_grop.world.geometry2d import Box, Disc
+from llm_grop.world.kind_colors import TABLE_TOP, hex_rgb, kind_rgb
 from llm_grop.world.scene import Chair, Scene, SceneTable
 
 #: Furniture collision bits (robot.xml): collides with the robot (2) and tableware (4).
@@ -44,16 +56,20 @@ TOP_T_M, LEG_M = 0.03, 0.05
 PEDESTAL_FOOT_M, FOOT_T_M = 0.25, 0.03
 #: Geom group of furniture and tableware in renders (robot.xml draws the robot in 2).
 GROUP_WORLD = 0
+#: Facets round a round table's top as drawn.
+ROUND_TOP_FACETS = 96
+#: A diner's placemat: width along the table's edge, depth into the table, thickness, and
+#: its gap to the edge (metres). It is drawn only: objects stand on the table top through
+#: it.
+PLACEMAT_M = (0.45, 0.33, 0.001)
+PLACEMAT_GAP_M = 0.015
 
 _WOOD = (0.62, 0.45, 0.30, 1.0)
-_TARGET = (0.55, 0.40, 0.28, 1.0)
+#: The target table's top: the 2D pictures' cloth.
+_TARGET = (*hex_rgb(TABLE_TOP), 1.0)
+_PLACEMAT = (0.62, 0.67, 0.73, 1.0)
 _CHAIR = (0.35, 0.25, 0.18, 1.0)
 _WALL = (0.86, 0.85, 0.82, 1.0)
-_COLOURS = {"plate": (0.97, 0.97, 0.95, 1), "cylinder": (0.55, 0.75, 0.95, 0.9),
-            "mug": (0.20, 0.40, 0.75, 1), "disk": (0.15, 0.25, 0.45, 1),
-            "box": (0.75, 0.76, 0.78, 1), "bread": (0.80, 0.55, 0.25, 1),
-            "berry": (0.85, 0.10, 0.15, 1)}
-_KIND_COLOURS = {"mug mat": (0.30, 0.30, 0.32, 1), "napkin": (0.90, 0.85, 0.70, 1)}
 
 
 @dataclass(frozen=True)
@@ -146,42 +162,43 @@ def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.visual.global_.offwidth, spec.visual.global_.offheight = image_size
-    spec.visual.headlight.ambient = [0.30, 0.30, 0.30]
-    spec.visual.headlight.diffuse = [0.35, 0.35, 0.35]
+    # Ambient, headlight and sun add up to about 1 on a top face seen from above, so the
+    # top-down render shows each kind in its own colour, as the 2D pictures do.
+    spec.visual.headlight.ambient = [0.25, 0.25, 0.25]
+    spec.visual.headlight.diffuse = [0.30, 0.30, 0.30]
     spec.visual.headlight.specular = [0.05, 0.05, 0.05]
     world = spec.worldbody
     _room(spec, scene)
     for t in scene.tables:
-        _table(world, t, _TARGET if t.name == scene.target else _WOOD)
+        _table(spec, t, _TARGET if t.name == scene.target else _WOOD)
     centre = scene.target_table.box
     for c in scene.chairs:
         _chair(world, c, (centre.x, centre.y), chair_mass_kg, chair_friction)
+    mats = _placemats(world, scene)
     for s in starts:
-        rgba = _KIND_COLOURS.get(s.item.kind, _COLOURS[s.item.style])
-        add_body(world, s.item, (s.x, s.y, s.z), s.yaw, rgba)
+        add_body(spec, world, s.item, (s.x, s.y, s.z), s.yaw, (*kind_rgb(s.item.kind), 1.0))
         spec.add_equality(type=mujoco.mjtEq.mjEQ_WELD, name=f"grip:{s.item.name}",
                           name1="hand", name2=s.item.name, objtype=mujoco.mjtObj.mjOBJ_BODY,
                           active=False, solref=[0.004, 1.0])
-    _cameras(world, scene)
+    add_cameras(world, scene, mats.get(0))
     model = spec.compile()
     return _index(model, scene, {s.item.name: s.item for s in starts})
 
 
 def _box_geom(body: mujoco.MjsBody, name: str, size: Sequence[float], pos: Sequence[float],
-              yaw: float, rgba: Sequence[float], bits: tuple[int, int] = FURNITURE
-              ) -> mujoco.MjsGeom:
+              yaw: float, rgba: Sequence[float], bits: tuple[int, int] = FURNITURE,
+              group: int = GROUP_WORLD) -> mujoco.MjsGeom:
     return body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=list(size),
                          pos=list(pos), quat=[math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)],
-                         rgba=list(rgba), contype=bits[0], conaffinity=bits[1],
-                         group=GROUP_WORLD)
+                         rgba=list(rgba), contype=bits[0], conaffinity=bits[1], group=group)
 
 
 def _cylinder_geom(body: mujoco.MjsBody, name: str, radius: float, half_height: float,
-                   z: float, rgba: Sequence[float]) -> None:
+                   z: float, rgba: Sequence[float]) -> mujoco.MjsGeom:
     """An upright furniture cylinder centred ``z`` metres above the body's origin."""
-    body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-                  size=[radius, half_height, 0], pos=[0, 0, z], rgba=list(rgba),
-                  contype=FURNITURE[0], conaffinity=FURNITURE[1], group=GROUP_WORLD)
+    return body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                         size=[radius, half_height, 0], pos=[0, 0, z], rgba=list(rgba),
+                         contype=FURNITURE[0], conaffinity=FURNITURE[1], group=GROUP_WORLD)
 
 
 def _room(spec: mujoco.MjSpec, scene: Scene) -> None:
@@ -209,16 +226,24 @@ def _room(spec: mujoco.MjSpec, scene: Scene) -> None:
                   b.yaw, _WALL)
 
 
-def _table(world: mujoco.MjsBody, table: SceneTable, rgba: Sequence[float]) -> None:
+def _table(spec: mujoco.MjSpec, table: SceneTable, rgba: Sequence[float]) -> None:
     """A table: its top (a box, or a cylinder for a round one) on four legs, or on one
-    pedestal for a round one."""
+    pedestal for a round one. A round top is drawn as a smooth disk (a mesh of
+    :data:`ROUND_TOP_FACETS` facets) over its hidden collision cylinder: MuJoCo draws a
+    cylinder with few facets, and drawing every cylinder with more slows each frame."""
     name, box, height = table.name, table.box, table.height
-    body = world.add_body(name=f"table:{name}", pos=[box.x, box.y, 0],
-                          quat=[math.cos(box.yaw / 2), 0, 0, math.sin(box.yaw / 2)])
+    body = spec.worldbody.add_body(name=f"table:{name}", pos=[box.x, box.y, 0],
+                                   quat=[math.cos(box.yaw / 2), 0, 0, math.sin(box.yaw / 2)])
     leg_h = (height - TOP_T_M) / 2
     if table.is_round:
         radius = box.width / 2
-        _cylinder_geom(body, f"top:{name}", radius, TOP_T_M / 2, height - TOP_T_M / 2, rgba)
+        top = _cylinder_geom(body, f"top:{name}", radius, TOP_T_M / 2, height - TOP_T_M / 2,
+                             rgba)
+        top.group = GROUP_COLLISION
+        disk = lathe([(0, 0), (radius, 0), (radius, TOP_T_M), (0, TOP_T_M)], ROUND_TOP_FACETS)
+        add_look(spec, body, f"top:{name}",
+                 [Visual(mujoco.mjtGeom.mjGEOM_MESH, vertices=disk[0] + (0, 0, height - TOP_T_M),
+                         faces=disk[1])], rgba)
         # One pedestal: a column on a foot, both well inside the top, so the base (which
         # stands outside the top's edge) never meets them.
         foot = min(PEDESTAL_FOOT_M, 0.8 * radius)
@@ -268,15 +293,44 @@ def _chair(world: mujoco.MjsBody, chair: Chair, table_xy: tuple[float, float],
     back_geom.mass = back_share * mass_kg
 
 
-def _cameras(world: mujoco.MjsBody, scene: Scene) -> None:
-    """``table_top``: orthographic, straight down on the target table, image up = the
-    table's +y (away from the diner)."""
+def _placemats(world: mujoco.MjsBody, scene: Scene) -> dict[int, tuple[float, float]]:
+    """A placemat on the target table in front of each diner's seat (table.diners, else the
+    contract's one diner), drawn only; where each lies (room frame, metres) by seat index.
+    A mat starts at the edge its diner faces and moves in until it lies on the top; all
+    mats shrink alike, down to half size, until none overlaps another (diners crowded
+    round a small table), and a seat whose mat still cannot lie there goes without."""
     t = scene.target_table
-    b = t.box
-    cam = world.add_camera(name="table_top", pos=[b.x, b.y, t.height + 1.5],
-                           quat=[math.cos(b.yaw / 2), 0, 0, math.sin(b.yaw / 2)])
-    cam.proj = mujoco.mjtProjection.mjPROJ_ORTHOGRAPHIC
-    cam.fovy = max(b.depth, b.width * 3 / 4) * 1.15
+    top = Polygon(t.footprint.outline()).buffer(-PLACEMAT_GAP_M)
+    seats = []
+    for k, seat in enumerate(scene.target_top.seats):
+        here = scene.table_to_room(seat.x, seat.y, seat.yaw)
+        ray = LineString([(here.x, here.y), (here.x + 3 * math.cos(here.theta),
+                                             here.y + 3 * math.sin(here.theta))])
+        if not ray.intersection(top).is_empty:
+            seats.append((k, here, Point(here.x, here.y).distance(ray.intersection(top))))
+    mats: dict[int, tuple[tuple[float, float], Polygon]] = {}
+    for scale in np.linspace(1.0, 0.5, 11):
+        width, depth = PLACEMAT_M[0] * scale, PLACEMAT_M[1] * scale
+        mats = {}
+        for k, here, edge in seats:
+            shape = rotate(rectangle(-depth / 2, -width / 2, depth / 2, width / 2),
+                           here.theta, origin=(0, 0), use_radians=True)
+            for step in range(60):
+                d = edge + depth / 2 + 0.005 * step
+                centre = (here.x + d * math.cos(here.theta), here.y + d * math.sin(here.theta))
+                placed = translate(shape, *centre)
+                if top.contains(placed):
+                    if not any(placed.intersects(other) for _, other in mats.values()):
+                        mats[k] = (centre, placed)
+                    break
+        if len(mats) == len(seats):
+            break
+    z = t.height + PLACEMAT_M[2] / 2
+    for k, here, _ in seats:
+        if k in mats:
+            _box_geom(world, f"placemat:{k}", (depth / 2, width / 2, PLACEMAT_M[2] / 2),
+                      (*mats[k][0], z), here.theta, _PLACEMAT, (0, 0), GROUP_VISUAL)
+    return {k: centre for k, (centre, _) in mats.items()}
 
 
 def _index(model: mujoco.MjModel, scene: Scene, objects: dict[str, Tableware]) -> WorldModel:
