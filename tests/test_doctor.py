@@ -296,3 +296,12 @@ def test_a_missing_llama_cpp_says_how_to_install_it() -> None:
                               None)
     assert check.status is Status.FAIL and "not installed" in check.detail
     assert check.fix == "scripts/setup.sh"
+
+
+def test_a_password_in_the_url_is_never_shown() -> None:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        url = f"http://me:hunter2@127.0.0.1:{sock.getsockname()[1]}/v1"
+        check = check_server(url, "local-model", None)
+    assert check.status is Status.FAIL and "hunter2" not in report_line(check)
+    assert check.detail.startswith("http://me:***@127.0.0.1:")

@@ -124,7 +124,7 @@ def arrange(request: str | None = None, *, task: int | None = None,
     LLM call to a JSONL file that ``llm="replay"`` can read back. ``guess=False`` refuses
     a request whose reading needs the LLM to choose objects it does not name. ``cache``
     is the directory of an LLM answer cache (:func:`make_llm`): a seeded call asked
-    before is answered from it.
+    before is answered from it (a :class:`CallLog` given as ``llm`` keeps its own).
     """
     catalog = catalog or Catalog.load(catalog_files)
     options = options or ArrangeOptions()

@@ -35,7 +35,7 @@ def check_server(base_url: str | None, model: str | None, api_key: str | None,
     from llm_grop.llm.openai_backend import DEFAULT_MODEL, PLACEHOLDER_API_KEY
 
     model = model or DEFAULT_MODEL
-    root = one_line(base_url.rstrip("/"))[:_MAX_SHOWN]
+    root = one_line(_without_password(base_url.rstrip("/")))[:_MAX_SHOWN]
     key = api_key or PLACEHOLDER_API_KEY
     if not key.isascii():
         return Check(_NAME, Status.FAIL, "the API key holds characters other than ASCII, "
@@ -84,3 +84,13 @@ def _get(url: str, key: str, timeout_s: float) -> tuple[int, bytes]:
             if time.monotonic() > deadline:
                 raise TimeoutError(f"no whole answer within {timeout_s:g} s")
         return response.status_code, bytes(body)
+
+
+def _without_password(url: str) -> str:
+    """``url`` as the report may show it: a password in it is replaced by ``***``."""
+    try:
+        parsed = httpx.URL(url)
+    except (httpx.InvalidURL, TypeError, ValueError):
+        return url
+    return str(parsed.copy_with(username=parsed.username, password="***")) \
+        if parsed.password else url
