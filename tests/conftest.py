@@ -18,10 +18,12 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from http.server import BaseHTTPRequestHandler
 from typing import Any
 
 import pytest
+
+from http_support import serving
 
 _ERROR_TYPES = {
     400: ("invalid_request_error", "bad_request"),
@@ -54,6 +56,8 @@ class ChatServer:
     delay_s: float = 0.0
     #: Seconds between the bytes of an answer's body (0: all at once): a trickling server.
     trickle_s: float = 0.0
+    #: Bytes of padding in a planned failure's message (a server that floods its errors).
+    error_bytes: int = 0
     #: The Retry-After header of error answers (default: 10 ms, keeping backoff short).
     retry_after: str | None = None
     reply: Callable[[dict[str, Any]], str] = default_reply
@@ -77,7 +81,7 @@ class ChatServer:
         if self.refuse_response_format and "response_format" in body:
             return 400, _error(400, "response_format is not supported")
         if planned is not None and planned != 200:
-            return planned, _error(planned, f"planned failure {planned}")
+            return planned, _error(planned, f"planned failure {planned}" + "x" * self.error_bytes)
         if self.api_key is not None and headers.get("authorization") != f"Bearer {self.api_key}":
             return 401, _error(401, "Incorrect API key provided.")
         model = body.get("model")
@@ -166,14 +170,6 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 def chat_server() -> Iterator[ChatServer]:
     """A running local chat-completions server, stopped after the test."""
     state = ChatServer()
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), _handler(state))
-    httpd.daemon_threads = True
-    state.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
-    thread = threading.Thread(target=httpd.serve_forever, args=(0.02,), daemon=True)
-    thread.start()
-    try:
+    with serving(_handler(state)) as root:
+        state.url = f"{root}/v1"
         yield state
-    finally:
-        httpd.shutdown()
-        httpd.server_close()
-        thread.join()

@@ -7,10 +7,9 @@ from __future__ import annotations
 import json
 import re
 import socket
-import threading
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from http.server import BaseHTTPRequestHandler
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +17,7 @@ import mujoco
 import pytest
 from packaging.requirements import Requirement
 
+from http_support import serving
 from llm_grop.cli import main
 from llm_grop.doctor import Status
 from llm_grop.doctor.check import report_line
@@ -141,17 +141,9 @@ def models_server() -> Iterator[ModelsServer]:
         def log_message(self, format: str, *args: Any) -> None:
             pass
 
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), Handler)
-    httpd.daemon_threads = True
-    state.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
-    thread = threading.Thread(target=httpd.serve_forever, args=(0.02,), daemon=True)
-    thread.start()
-    try:
+    with serving(Handler) as root:
+        state.url = f"{root}/v1"
         yield state
-    finally:
-        httpd.shutdown()
-        httpd.server_close()
-        thread.join()
 
 
 def test_a_server_that_lists_the_model_is_ok(models_server: ModelsServer) -> None:

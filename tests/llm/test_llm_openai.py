@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from llm_grop.errors import LLMUnavailable
+from llm_grop.errors import LLMTransient, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, SamplingParams
 from llm_grop.llm.openai_backend import DEFAULT_MODEL, PLACEHOLDER_API_KEY, OpenAILLM
 from llm_grop.llm.registry import create_llm
@@ -214,6 +214,25 @@ def test_a_huge_answer_is_refused_as_it_arrives(chat_server: ChatServer) -> None
     llm = OpenAILLM(BackendOptions(base_url=chat_server.url, max_answer_bytes=1024 * 1024))
     with pytest.raises(LLMUnavailable, match=r"is larger than 1048576 bytes; refused"):
         llm.complete("hi", PARAMS)
+
+
+def test_a_huge_error_answer_is_refused_as_it_arrives(chat_server: ChatServer) -> None:
+    chat_server.plan.extend([500])
+    chat_server.error_bytes = 5 * 1024 * 1024
+    llm = OpenAILLM(BackendOptions(base_url=chat_server.url, max_answer_bytes=1024 * 1024,
+                                   max_retries=2))
+    with pytest.raises(LLMUnavailable, match=r"is larger than 1048576 bytes; refused"):
+        llm.complete("hi", PARAMS)
+    assert len(chat_server.requests) == 1  # refused, not asked again
+
+
+def test_a_trickled_error_answer_is_cut_off_at_the_deadline(chat_server: ChatServer) -> None:
+    # 2 kB at 5 ms a byte would take 10 s, each byte well within any read timeout.
+    chat_server.plan.extend([503])
+    chat_server.error_bytes = 2000
+    chat_server.trickle_s = 0.005
+    with pytest.raises(LLMTransient, match=r"no answer within the 1 s deadline"):
+        make(chat_server, timeout_s=1.0, max_retries=0).complete("hi", PARAMS)
 
 
 def test_a_retry_after_that_is_no_number_or_date_falls_back_to_backoff(

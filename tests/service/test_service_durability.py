@@ -105,3 +105,34 @@ def test_the_queue_is_bounded(tmp_path: Path) -> None:
     store.submit("run", {}, "me", queue=10, per_client=1)
     with pytest.raises(Overloaded, match="1 of your runs are unfinished"):
         store.submit("run", {}, "me", queue=10, per_client=1)
+
+
+def test_ended_jobs_are_pruned_after_the_keep_time_with_their_files(tmp_path: Path) -> None:
+    from llm_grop.service.config import ServiceConfig
+    from llm_grop.service.workers import WorkerPool
+
+    db = tmp_path / "jobs.sqlite"
+    store = JobStore(db)
+    old, recent, waiting = (store.submit("run", {"task": k}, "me", queue=10)
+                            for k in range(3))
+    for _ in range(2):
+        job = store.claim(worker=1)
+        assert job is not None
+        store.event(job, "working")
+        assert store.finish(job, {"run": job.id}, {"a.png": ("image/png", b"x")})
+    store.conn.execute("UPDATE jobs SET finished = ? WHERE id = ?",
+                       (time.time() - 40 * 86400, old))
+    store.conn.commit()
+    # The supervisor's round prunes what ended more than keep_s ago, nothing else.
+    pool = WorkerPool(ServiceConfig(db=db, backends=(), keep_s=30 * 86400))
+    pool._store = store
+    pool._round()
+    assert store.get(old) is None and store.file(old, "a.png") is None
+    assert store.events(old) == []
+    assert [store.get(j).state for j in (recent, waiting)] == [  # type: ignore[union-attr]
+        "done", "queued"]
+    assert store.file(recent, "a.png") == ("image/png", b"x")
+    running = store.claim(worker=1)
+    assert running is not None and running.id == waiting
+    assert store.prune(time.time() + 1) == 1  # the recent one; never a running job
+    assert store.get(waiting) is not None and store.get(recent) is None

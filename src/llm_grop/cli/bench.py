@@ -20,6 +20,7 @@ from llm_grop.cli.options import (
     SIMULATOR,
     TABLE,
     TRUTH,
+    WEIGHT,
     attempt_flags,
     check_out_dir,
     llm_flags_without_record,
@@ -133,8 +134,7 @@ def _for_task(task: int, exc: BadInput) -> BadInput:
 @GRASP
 @TRUTH
 @FEASIBILITY
-@click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
-              help="GROP's utility weight w (seconds per unit of success probability).")
+@WEIGHT
 @FIDELITY_WEIGHT
 @click.option("--task-file", "task_files", multiple=True,
               type=click.Path(dir_okay=False, path_type=Path),

@@ -230,6 +230,10 @@ FEASIBILITY = click.option(
     help="The planner's feasibility profile: default (assumed) or mujoco (fitted in 3D).")
 
 
+WEIGHT = click.option(
+    "--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
+    help="GROP's utility weight w (seconds per unit of success probability).")
+
 FIDELITY_WEIGHT = click.option(
     "--fidelity-weight", "fidelity_w", default=1.0, show_default=True,
     type=click.FloatRange(0),

@@ -18,6 +18,7 @@ from llm_grop.cli.options import (
     SIMULATOR,
     TABLE,
     TRUTH,
+    WEIGHT,
     StagedOutputs,
     attempt_flags,
     check_outputs,
@@ -47,8 +48,7 @@ from llm_grop.world.table import Table
 @GRASP
 @TRUTH
 @FEASIBILITY
-@click.option("--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
-              help="GROP's utility weight w (seconds per unit of success probability).")
+@WEIGHT
 @FIDELITY_WEIGHT
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write the run JSON here.")

@@ -46,11 +46,16 @@ def _default_db() -> Path:
               help="Jobs that may wait at once; more are answered 429.")
 @click.option("--runs-per-client", default=4, show_default=True, type=click.IntRange(1),
               help="Runs one client address may have waiting or running; more get 429.")
+@click.option("--keep-days", default=30.0, show_default=True,
+              type=click.FloatRange(0, min_open=True),
+              help="Days an ended job's result, pictures and video are kept for its "
+                   "permalink; older ones are deleted hourly.")
 @click.option("--openapi", is_flag=True,
               help="Print the OpenAPI document (docs/schema/openapi.json) and exit.")
 def serve(host: str, port: int, backends: tuple[str, ...], replay_path: Path | None,
           workers: int, llm_threads: int | None, db: Path | None, token: str | None,
-          run_time_s: float, queue: int, runs_per_client: int, openapi: bool,
+          run_time_s: float, queue: int, runs_per_client: int, keep_days: float,
+          openapi: bool,
           **flags: Any) -> None:
     """Serve the JSON API (/v1/) and the playground page (/) over HTTP.
 
@@ -82,7 +87,8 @@ def serve(host: str, port: int, backends: tuple[str, ...], replay_path: Path | N
                            workers=workers, token=token,
                            limits=Limits(run_time_s=run_time_s, queue=queue,
                                          jobs_per_client=runs_per_client),
-                           llm_threads=llm_threads or max(1, (os.cpu_count() or 1) // workers))
+                           llm_threads=llm_threads or max(1, (os.cpu_count() or 1) // workers),
+                           keep_s=keep_days * 86400)
     if openapi:
         click.echo(json.dumps(create_app(config, workers=False).openapi(), indent=2))
         return

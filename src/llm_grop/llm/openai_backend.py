@@ -9,15 +9,16 @@ llama.cpp server) through the official ``openai`` SDK.
   :data:`PLACEHOLDER_API_KEY`, which local servers accept and OpenAI refuses (401).
 - Model: ``BackendOptions.model``, else :data:`DEFAULT_MODEL`.
 - A deadline: ``BackendOptions.timeout_s`` bounds the whole call, every attempt, the
-  reading of each answer and the waits between attempts included, so a server that
-  trickles its answer a byte at a time, or asks to be retried much later, cannot hold a
-  run longer than that.
+  reading of each answer (an error's or a redirect's too) and the waits between attempts
+  included, so a server that trickles its answer a byte at a time, or asks to be retried
+  much later, cannot hold a run longer than that. Only its headers are bounded per read
+  (``timeout_s`` each), as httpx bounds them.
 - Retries: connection errors, 408, 409, 429 and 5xx answers are retried up to
   ``max_retries`` times with exponential backoff (0.5 s doubling to at most 8 s, with
   jitter), honouring the server's ``retry-after-ms`` and ``retry-after`` headers, as
   long as the deadline allows.
-- A size cap: an answer larger than ``BackendOptions.max_answer_bytes`` is refused as it
-  arrives.
+- A size cap: an answer larger than ``BackendOptions.max_answer_bytes``, an error's
+  included, is refused as it arrives.
 - Grammars: chat-completions has no GBNF support, so ``grammar`` is ignored.
 - Structured output: given a ``schema``, the request asks for JSON that follows it
   (``response_format`` of type ``json_schema``, strict). A server that turns this down
@@ -73,6 +74,8 @@ class OpenAILLM:
         self._max_retries = options.max_retries
         self._timeout_s = options.timeout_s
         self._max_bytes = options.max_answer_bytes
+        #: When the call under way must end (:func:`time.monotonic`; none between calls).
+        self._deadline = math.inf
         self._jitter = random.Random()
         try:
             # base_url=None lets the SDK read OPENAI_BASE_URL.
@@ -82,6 +85,8 @@ class OpenAILLM:
                 api_key=api_key,
                 timeout=options.timeout_s,
                 max_retries=0,
+                http_client=openai.DefaultHttpxClient(
+                    event_hooks={"response": [self._read_other_body]}),
             )
         except (openai.OpenAIError, ValueError, TypeError) as exc:
             raise LLMUnavailable(f"openai backend: cannot configure the client: {_one_line(exc)}"
@@ -112,7 +117,7 @@ class OpenAILLM:
             kwargs["response_format"] = {"type": "json_schema", "json_schema": {
                 "name": "answer", "schema": dict(schema), "strict": True}}
         start = time.perf_counter()
-        deadline = time.monotonic() + self._timeout_s
+        deadline = self._deadline = time.monotonic() + self._timeout_s
         try:
             response = self._retried(kwargs, deadline)
         except (openai.BadRequestError, openai.UnprocessableEntityError) as exc:
@@ -194,6 +199,25 @@ class OpenAILLM:
                     message=_one_line(exc),
                     request=httpx.Request("POST", self.base_url)) from None
         return json.loads(b"".join(chunks))
+
+    def _read_other_body(self, response: httpx.Response) -> None:
+        """Read the body of an answer other than a success (an error, a redirect) within
+        the call's deadline and the size cap: the SDK and httpx read such bodies whole,
+        with no cap and a timeout per read only. A success's body is :meth:`_attempt`'s."""
+        if response.status_code < 300:
+            return
+        body = bytearray()
+        for chunk in response.iter_bytes():
+            body += chunk
+            if len(body) > self._max_bytes:
+                response.close()
+                raise _TooLarge(len(body))
+            if time.monotonic() > self._deadline:
+                response.close()
+                raise httpx.ReadTimeout("the call's deadline passed", request=response.request)
+        # httpx has no public way to hand back a body read in pieces; read() and .text
+        # return what is stored here.
+        response._content = bytes(body)
 
     def _wait(self, exc: Exception, attempt: int) -> float:
         """Seconds before the next attempt: the server's Retry-After, else backoff."""

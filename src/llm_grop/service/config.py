@@ -59,6 +59,9 @@ class ServiceConfig:
     limits: Limits = field(default_factory=Limits)
     #: The embedded model's CPU threads in each worker (``None``: the cores over workers).
     llm_threads: int | None = None
+    #: Seconds an ended job (its result, files and video) is kept after it ended, for its
+    #: permalink; ``None``: forever. The supervisor prunes older ones hourly.
+    keep_s: float | None = 30 * 86400.0
 
     @property
     def scratch(self) -> Path:

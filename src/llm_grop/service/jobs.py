@@ -252,6 +252,14 @@ class JobStore:
                           "WHERE id = ? AND claim = ? AND state = 'running'",
                           (job.id, job.claim))
 
+    def prune(self, before: float) -> int:
+        """Forget every ended job that ended before ``before`` (a :func:`time.time`), with
+        its files and events; how many. Queued and running jobs are never pruned."""
+        with transaction(self.conn) as c:
+            gone = c.execute("DELETE FROM jobs WHERE state IN ('done', 'failed', 'cancelled') "
+                             "AND finished < ?", (before,)).rowcount
+        return int(gone)
+
     def recover(self) -> int:
         """Re-queue (or fail, after :data:`MAX_ATTEMPTS`) every job a previous server left
         running; how many there were. Call it before any worker starts."""

@@ -29,6 +29,8 @@ log = logging.getLogger(__name__)
 IDLE_POLL_S = 0.05
 #: Seconds between the supervisor's rounds.
 SUPERVISE_S = 0.25
+#: Seconds between the supervisor's prunings of ended jobs (``ServiceConfig.keep_s``).
+PRUNE_S = 3600.0
 
 
 #: The Python API's parameters that the JSON bodies name otherwise.
@@ -102,6 +104,7 @@ class WorkerPool:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._store: JobStore | None = None
+        self._next_prune = 0.0
 
     def start(self) -> None:
         """Start the workers and the supervisor."""
@@ -170,3 +173,9 @@ class WorkerPool:
         for job in store.running():
             if job.worker not in live:
                 store.orphaned(job, "its worker died")
+        if self.config.keep_s is not None and now >= self._next_prune:
+            self._next_prune = now + PRUNE_S
+            gone = store.prune(now - self.config.keep_s)
+            if gone:
+                log.info("pruned %d job(s) that ended over %g days ago", gone,
+                         self.config.keep_s / 86400)
