@@ -23,6 +23,7 @@ from typing import Any
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response, StreamingResponse
+from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
 
 from llm_grop.errors import LLMGropError
@@ -107,7 +108,8 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
     @app.exception_handler(Refused)
     async def refused(request: Request, exc: Refused) -> Response:
         if not request.url.path.startswith("/v1/") and hasattr(app.state, "page_error"):
-            return app.state.page_error(request, exc.status, exc.message)
+            return await run_in_threadpool(app.state.page_error, request, exc.status,
+                                           exc.message)
         return error_response(exc.status, exc.message, exc.headers)
 
     @app.exception_handler(RequestValidationError)
@@ -140,8 +142,11 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
     def client(request: Request) -> str:
         return request.client.host if request.client is not None else "?"
 
+    # Handlers that use the job store are plain functions, which the server runs in its
+    # worker threads, or hand the store's calls to them: a store call may wait on a
+    # worker's commit (a video), and must not stall every other request meanwhile.
     @app.get("/v1/info", response_model=Info, summary="What this server offers")
-    async def info() -> Info:
+    def info() -> Info:
         from llm_grop.api import available_methods, available_simulators
 
         limits = config.limits
@@ -158,31 +163,33 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
               response_model_exclude_unset=True,
               summary="Arrange the objects of a request on a table")
     async def post_arrangement(body: ArrangeBody, request: Request) -> ArrangementAnswer:
-        return service.arrangement(await service.finished(
-            service.submit("arrange", body, client(request))))
+        job_id = await run_in_threadpool(service.submit, "arrange", body, client(request))
+        return service.arrangement(await service.finished(job_id))
 
     @app.get("/v1/arrangements/{job_id}", response_model=ArrangementAnswer,
              response_model_exclude_unset=True,
              responses=_ERRORS, summary="An arrangement at its permalink")
     async def get_arrangement(job_id: str) -> ArrangementAnswer:
-        return service.arrangement(await service.finished(service.get(job_id, "arrange").id))
+        job = await run_in_threadpool(service.get, job_id, "arrange")
+        return service.arrangement(await service.finished(job.id))
 
     @app.post("/v1/plans", response_model=PlanAnswer, responses=_ERRORS,
               response_model_exclude_unset=True,
               summary="A task-motion plan for a robot stack to execute")
     async def post_plan(body: PlanBody, request: Request) -> PlanAnswer:
-        return service.plan(await service.finished(service.submit("plan", body,
-                                                                  client(request))))
+        job_id = await run_in_threadpool(service.submit, "plan", body, client(request))
+        return service.plan(await service.finished(job_id))
 
     @app.get("/v1/plans/{job_id}", response_model=PlanAnswer, responses=_ERRORS,
              response_model_exclude_unset=True,
              summary="A plan at its permalink")
     async def get_plan(job_id: str) -> PlanAnswer:
-        return service.plan(await service.finished(service.get(job_id, "plan").id))
+        job = await run_in_threadpool(service.get, job_id, "plan")
+        return service.plan(await service.finished(job.id))
 
     @app.post("/v1/runs", response_model=JobAnswer, status_code=202, responses=_ERRORS,
               summary="Start a simulated run as a job")
-    async def post_run(body: RunBody, request: Request, response: Response) -> JobAnswer:
+    def post_run(body: RunBody, request: Request, response: Response) -> JobAnswer:
         job = service.jobs.get(service.submit("run", body, client(request)))
         assert job is not None
         response.headers["Location"] = f"/v1/runs/{job.id}"
@@ -190,12 +197,12 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
     @app.get("/v1/runs/{job_id}", response_model=JobAnswer, responses=_ERRORS,
              summary="A run's state and result")
-    async def get_run(job_id: str) -> JobAnswer:
+    def get_run(job_id: str) -> JobAnswer:
         return service.run(service.get(job_id, "run"))
 
     @app.delete("/v1/runs/{job_id}", response_model=JobAnswer, responses=_ERRORS,
                 summary="Cancel a run")
-    async def cancel_run(job_id: str) -> JobAnswer:
+    def cancel_run(job_id: str) -> JobAnswer:
         service.get(job_id, "run")
         job = service.jobs.cancel(job_id)
         assert job is not None
@@ -204,7 +211,7 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
     @app.get("/v1/runs/{job_id}/events", summary="A run's progress as server-sent events",
              response_class=StreamingResponse,
              responses={200: {"content": {"text/event-stream": {}}}})
-    async def run_events(job_id: str, request: Request) -> StreamingResponse:
+    def run_events(job_id: str, request: Request) -> StreamingResponse:
         service.get(job_id, "run")
         start = request.headers.get("last-event-id", "0")
         after = int(start) if start.isascii() and start.isdigit() and len(start) < 12 else 0
@@ -214,7 +221,7 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
     @app.get("/v1/files/{job_id}/{name}", summary="A job's picture, render or video",
              responses={200: {"content": {"image/png": {}, "video/mp4": {}}}})
-    async def file(job_id: str, name: str, request: Request) -> Response:
+    def file(job_id: str, name: str, request: Request) -> Response:
         found = service.jobs.file(job_id, name)
         if found is None:
             raise Refused(404, f"no file {name!r} for job {job_id!r}")
@@ -238,11 +245,11 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
 async def _events(jobs: JobStore, job_id: str, after: int) -> AsyncIterator[str]:
     while True:
-        for seq, at, message in jobs.events(job_id, after):
+        for seq, at, message in await run_in_threadpool(jobs.events, job_id, after):
             after = seq
             data = json.dumps({"at": at, "message": message})
             yield f"id: {seq}\nevent: progress\ndata: {data}\n\n"
-        job = jobs.get(job_id)
+        job = await run_in_threadpool(jobs.get, job_id)
         if job is None or job.terminal:
             state = job.state if job is not None else "gone"
             data = {"state": state, "error": job.error if job is not None else None}

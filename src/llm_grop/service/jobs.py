@@ -12,14 +12,16 @@ attempts, so every accepted job reaches a terminal state.
 
 from __future__ import annotations
 
+import functools
 import json
 import secrets
 import sqlite3
+import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Concatenate, Literal, ParamSpec, TypeVar
 
 from llm_grop import database
 from llm_grop.database import transaction
@@ -79,19 +81,39 @@ def _job(row: sqlite3.Row) -> Job:
                bool(row["cancel"]))
 
 
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _locked(method: Callable[Concatenate[JobStore, _P], _R]
+            ) -> Callable[Concatenate[JobStore, _P], _R]:
+    """``method`` run holding the store's lock: the web server calls the store from its
+    worker threads, and a transaction must never interleave with another's on the one
+    connection."""
+    @functools.wraps(method)
+    def locked(self: JobStore, *args: _P.args, **kwargs: _P.kwargs) -> _R:
+        with self.lock:
+            return method(self, *args, **kwargs)
+    return locked
+
+
 class JobStore:
-    """The jobs in the database at ``path`` (made if missing)."""
+    """The jobs in the database at ``path`` (made if missing). Its methods may be called
+    from several threads; they take turns on the one connection."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.conn = database.connect(JOBS, path, create=True)
+        self.lock = threading.RLock()
 
+    @_locked
     def close(self) -> None:
         """Close the connection."""
         self.conn.close()
 
     # ---- clients ------------------------------------------------------------------------
 
+    @_locked
     def submit(self, kind: Kind, body: Mapping[str, Any], client: str, *, queue: int,
                per_client: int | None = None) -> str:
         """Accept a job and return its id; :class:`Overloaded` when ``queue`` jobs wait
@@ -115,11 +137,13 @@ class JobStore:
                       (job_id, kind, json.dumps(body), client, PRIORITY[kind], time.time()))
         return job_id
 
+    @_locked
     def get(self, job_id: str) -> Job | None:
         """The job ``job_id``, or ``None``."""
         row = self.conn.execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
         return _job(row) if row is not None else None
 
+    @_locked
     def cancel(self, job_id: str) -> Job | None:
         """Cancel a job: a queued one at once, a running one when its worker is stopped
         (:meth:`to_cancel`); an ended one stays as it is."""
@@ -131,28 +155,33 @@ class JobStore:
                       (job_id,))
         return self.get(job_id)
 
+    @_locked
     def file(self, job_id: str, name: str) -> tuple[str, bytes] | None:
         """A job's file: ``(media type, bytes)``, or ``None``."""
         row = self.conn.execute("SELECT media_type, data FROM files WHERE job = ? AND "
                                 "name = ?", (job_id, name)).fetchone()
         return (row[0], bytes(row[1])) if row is not None else None
 
+    @_locked
     def files(self, job_id: str) -> list[str]:
         """The names of a job's files."""
         return [r[0] for r in self.conn.execute(
             "SELECT name FROM files WHERE job = ? ORDER BY name", (job_id,))]
 
+    @_locked
     def events(self, job_id: str, after: int = 0) -> list[tuple[int, float, str]]:
         """A job's progress events after number ``after``: ``(seq, time, message)``."""
         return [(r[0], r[1], r[2]) for r in self.conn.execute(
             "SELECT seq, at, message FROM events WHERE job = ? AND seq > ? ORDER BY seq",
             (job_id, after))]
 
+    @_locked
     def recent(self, ids: list[str]) -> list[Job]:
         """The jobs among ``ids`` that exist, newest first."""
         jobs = [j for j in (self.get(i) for i in ids) if j is not None]
         return sorted(jobs, key=lambda j: j.created, reverse=True)
 
+    @_locked
     def counts(self) -> dict[str, int]:
         """How many jobs are in each state."""
         return {r[0]: r[1] for r in self.conn.execute(
@@ -160,6 +189,7 @@ class JobStore:
 
     # ---- workers ------------------------------------------------------------------------
 
+    @_locked
     def claim(self, worker: int) -> Job | None:
         """The next queued job, now running under a fresh claim for process ``worker``."""
         # Idle workers look often: a read takes no lock, so only a likely claim writes.
@@ -180,6 +210,7 @@ class JobStore:
                             "was interrupted")
         return job
 
+    @_locked
     def event(self, job: Job, message: str) -> None:
         """Add a progress event to ``job`` (nothing if its claim is no longer held)."""
         with transaction(self.conn) as c:
@@ -188,6 +219,7 @@ class JobStore:
                           "coalesce(max(seq), 0) + 1, ?, ? FROM events WHERE job = ?",
                           (job.id, time.time(), message, job.id))
 
+    @_locked
     def finish(self, job: Job, result: Mapping[str, Any],
                files: Mapping[str, tuple[str, bytes]]) -> bool:
         """Record ``job`` done with ``result`` and ``files`` (name -> media type, bytes);
@@ -201,6 +233,7 @@ class JobStore:
                       (json.dumps(result), time.time(), job.id))
         return True
 
+    @_locked
     def fail(self, job: Job, status: int, error: str) -> bool:
         """Record ``job`` failed with HTTP ``status`` and the one-line ``error``; ``False``
         if its claim is no longer held."""
@@ -218,11 +251,13 @@ class JobStore:
 
     # ---- the supervisor -----------------------------------------------------------------
 
+    @_locked
     def running(self) -> list[Job]:
         """Every running job."""
         return [_job(r) for r in self.conn.execute(
             "SELECT * FROM jobs WHERE state = 'running' ORDER BY rowid")]
 
+    @_locked
     def end(self, job: Job, state: Literal["failed", "cancelled"], status: int | None,
             error: str) -> None:
         """End a running job whose worker was stopped (over time, or cancelled)."""
@@ -231,6 +266,7 @@ class JobStore:
                       "WHERE id = ? AND claim = ? AND state = 'running'",
                       (state, status, error, time.time(), job.id, job.claim))
 
+    @_locked
     def orphaned(self, job: Job, why: str) -> None:
         """A running job whose worker died (``why``): queued again, or failed after
         :data:`MAX_ATTEMPTS` attempts (cancelled if the client cancelled it)."""
@@ -252,6 +288,7 @@ class JobStore:
                           "WHERE id = ? AND claim = ? AND state = 'running'",
                           (job.id, job.claim))
 
+    @_locked
     def prune(self, before: float) -> int:
         """Forget every ended job that ended before ``before`` (a :func:`time.time`), with
         its files and events; how many. Queued and running jobs are never pruned."""
@@ -260,6 +297,7 @@ class JobStore:
                              "AND finished < ?", (before,)).rowcount
         return int(gone)
 
+    @_locked
     def recover(self) -> int:
         """Re-queue (or fail, after :data:`MAX_ATTEMPTS`) every job a previous server left
         running; how many there were. Call it before any worker starts."""

@@ -19,6 +19,7 @@ from fastapi import FastAPI, Form, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 from pydantic import ValidationError
+from starlette.concurrency import run_in_threadpool
 
 from llm_grop.service.http import Refused
 from llm_grop.service.jobs import Job
@@ -82,7 +83,7 @@ def add_playground(app: FastAPI, service: Service) -> None:
                                                                  error=message)
 
     @app.get("/", response_class=HTMLResponse, include_in_schema=False)
-    async def index(request: Request) -> HTMLResponse:
+    def index(request: Request) -> HTMLResponse:
         return page(request)
 
     @app.get("/kinds.css", include_in_schema=False)
@@ -113,16 +114,20 @@ def add_playground(app: FastAPI, service: Service) -> None:
         try:
             kind, body = _body(action, fields)
         except ValidationError as exc:
-            return page(request, 422, form=_form(fields), error=one_line(exc.errors()))
+            return await run_in_threadpool(page, request, 422, form=_form(fields),
+                                           error=one_line(exc.errors()))
         except ValueError as exc:
-            return page(request, 422, form=_form(fields), error=str(exc))
+            return await run_in_threadpool(page, request, 422, form=_form(fields),
+                                           error=str(exc))
         client = request.client.host if request.client is not None else "?"
         try:
-            job_id = service.submit(kind, body, client)  # type: ignore[arg-type]
+            job_id = await run_in_threadpool(service.submit, kind, body,  # type: ignore[arg-type]
+                                             client)
             if kind != "run":
                 await service.finished(job_id)
         except Refused as exc:
-            return page(request, exc.status, form=_form(fields), error=exc.message)
+            return await run_in_threadpool(page, request, exc.status, form=_form(fields),
+                                           error=exc.message)
         except StillRunning:
             pass  # its page says so, and follows it
         answer = RedirectResponse(f"/{_PREFIX[kind]}/{job_id}", status_code=303)
@@ -130,7 +135,7 @@ def add_playground(app: FastAPI, service: Service) -> None:
         return answer
 
     @app.get("/{prefix}/{job_id}", response_class=HTMLResponse, include_in_schema=False)
-    async def result(request: Request, prefix: str, job_id: str) -> HTMLResponse:
+    def result(request: Request, prefix: str, job_id: str) -> HTMLResponse:
         if prefix not in _KIND or not _ID.match(job_id):
             raise Refused(404, f"no page {request.url.path!r}")
         job = service.get(job_id, _KIND[prefix])  # type: ignore[arg-type]

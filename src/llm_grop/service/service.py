@@ -6,6 +6,8 @@ from __future__ import annotations
 import asyncio
 from dataclasses import dataclass
 
+from starlette.concurrency import run_in_threadpool
+
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.http import Refused
 from llm_grop.service.jobs import Job, JobStore, Kind, Overloaded
@@ -83,7 +85,7 @@ class Service:
         wait = self.config.limits.wait_s
         deadline = loop.time() + wait
         while True:
-            job = self.jobs.get(job_id)
+            job = await run_in_threadpool(self.jobs.get, job_id)
             assert job is not None
             if job.terminal:
                 return job
