@@ -56,6 +56,8 @@ class ChatServer:
     delay_s: float = 0.0
     #: Seconds between the bytes of an answer's body (0: all at once): a trickling server.
     trickle_s: float = 0.0
+    #: Seconds the answer stops halfway through its body (a server that hangs mid-answer).
+    stall_s: float = 0.0
     #: Bytes of padding in a planned failure's message (a server that floods its errors).
     error_bytes: int = 0
     #: The Retry-After header of error answers (default: 10 ms, keeping backoff short).
@@ -143,6 +145,12 @@ def _handler(state: ChatServer) -> type[BaseHTTPRequestHandler]:
                     # Keeps the retry backoff short.
                     self.send_header("retry-after-ms", "10")
                 self.end_headers()
+                if state.stall_s:
+                    self.wfile.write(data[:len(data) // 2])
+                    self.wfile.flush()
+                    time.sleep(state.stall_s)
+                    self.wfile.write(data[len(data) // 2:])
+                    return
                 if not state.trickle_s:
                     self.wfile.write(data)
                     return

@@ -36,3 +36,18 @@ def test_interrupts_at_random_moments_print_one_line_and_no_traceback(tmp_path: 
             lines = [line for line in text.splitlines() if line.strip()]
             assert len(lines) == 1 and "interrupted" in lines[0], report[-1]
     print("\n".join(f"{t:5.2f} s {name:7s} exit {code}: {err}" for t, name, code, err in report))
+
+
+def test_an_interrupt_inside_an_extensions_start_counts_as_an_interrupt() -> None:
+    from llm_grop.entry import interrupted
+
+    # pybind11 modules (mujoco's) stopped by Ctrl-C while they initialise raise this.
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as stop:
+            raise ImportError("initialization failed") from stop
+    except ImportError as exc:
+        assert interrupted(exc)
+    assert not interrupted(ImportError("No module named 'ray'"))
+    assert interrupted(KeyboardInterrupt())

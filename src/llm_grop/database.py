@@ -76,7 +76,8 @@ def connect(kind: Kind, path: str | Path, *, create: bool = False, upto: int | N
         raise BadInput(f"{flag} {path}: no such {kind.label}; {kind.make_hint}")
     try:
         # A web request may open it in one worker thread and use it in another, one at a
-        # time; it is never shared by two at once.
+        # time (the rating site); it is never shared by two at once (the service's job
+        # store gives each thread a connection of its own).
         conn = sqlite3.connect(path, isolation_level=None, timeout=BUSY_TIMEOUT_MS / 1000,
                                check_same_thread=False)
     except sqlite3.Error as exc:

@@ -42,7 +42,9 @@ def main() -> int:
         from llm_grop.cli import main as cli_main
 
         code = cli_main()
-    except KeyboardInterrupt:  # before the command line could take it
+    except (KeyboardInterrupt, ImportError) as exc:  # before the command line could take it
+        if not interrupted(exc):
+            raise
         sys.stderr.write("llm-grop: interrupted\n")
         code = INTERRUPTED
     finally:
@@ -53,6 +55,20 @@ def main() -> int:
     if code in (INTERRUPTED, TERMINATED):
         _exit(code)
     return code
+
+
+def interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was caused by, an interrupt: an extension module that Ctrl-C
+    stops while it initialises reports ``ImportError: initialization failed`` from the
+    ``KeyboardInterrupt``."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False
 
 
 def _in_cleanup(frame: FrameType | None) -> bool:

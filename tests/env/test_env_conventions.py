@@ -214,3 +214,8 @@ def _wrapper(env: gymnasium.Env[Any, Any], kind: type) -> gymnasium.Env[Any, Any
             return env
         env = env.env
     return None
+
+
+def test_a_negative_chair_count_is_one_bad_input() -> None:
+    with pytest.raises(ValueError, match=r"^chairs=-1: must be a whole number, 0 or more$"):
+        DiningRoomEnv(["mug"], chairs=-1)

@@ -235,6 +235,13 @@ def test_a_trickled_error_answer_is_cut_off_at_the_deadline(chat_server: ChatSer
         make(chat_server, timeout_s=1.0, max_retries=0).complete("hi", PARAMS)
 
 
+def test_an_answer_that_stops_halfway_is_one_line_at_the_deadline(
+        chat_server: ChatServer) -> None:
+    chat_server.stall_s = 3.0
+    with pytest.raises(LLMTransient, match=r"no answer within the 1 s deadline"):
+        make(chat_server, timeout_s=1.0, max_retries=0).complete("hi", PARAMS)
+
+
 def test_a_retry_after_that_is_no_number_or_date_falls_back_to_backoff(
         chat_server: ChatServer) -> None:
     chat_server.plan.extend([429])

@@ -159,3 +159,22 @@ def test_only_columns_with_data_are_kept() -> None:
     assert with_data(headers, rows) == (("method", "time", "p"),
                                         [("a", "1.0", "-"), ("b", "-", "0.5")])
     assert with_data(headers, []) == (headers, [])
+
+
+@pytest.mark.parametrize("size_m", [(0.9, 0.6), (0.6, 1.2), (0.5, 2.0), (2.0, 0.5)])
+def test_the_title_is_cut_off_whatever_the_table_shape(size_m: tuple[float, float],
+                                                       tmp_path: Path) -> None:
+    from llm_grop.ratings.study import below_title
+    from llm_grop.render.table import draw_arrangement
+    from llm_grop.world.arrangement import Arrangement
+    from llm_grop.world.table import Table
+
+    path = tmp_path / "t.png"
+    draw_arrangement(Arrangement("x", Table(*size_m), ()), path,
+                     title="Requested: dinner plate, dinner fork, dinner knife")
+    whole = Image.open(path)
+    cut = below_title(whole)
+    assert cut.size[0] == whole.size[0] and cut.size[1] < whole.size[1]
+    # What is left starts with white space, above the plot frame.
+    top = np.asarray(cut.convert("L"))[:5]
+    assert (top > 200).all()

@@ -136,3 +136,41 @@ def test_ended_jobs_are_pruned_after_the_keep_time_with_their_files(tmp_path: Pa
     assert running is not None and running.id == waiting
     assert store.prune(time.time() + 1) == 1  # the recent one; never a running job
     assert store.get(waiting) is not None and store.get(recent) is None
+    store.close()
+
+
+def test_pruning_goes_a_batch_at_a_time(tmp_path: Path) -> None:
+    store = JobStore(tmp_path / "jobs.sqlite")
+    ids = [store.submit("arrange", {"k": k}, "me", queue=10) for k in range(5)]
+    for _ in ids:
+        job = store.claim(worker=1)
+        assert job is not None and store.finish(job, {}, {})
+    assert store.prune(time.time() + 1, batch=2) == 5
+    assert all(store.get(j) is None for j in ids)
+    store.close()
+
+
+def test_each_thread_has_a_connection_and_a_waiting_writer_holds_up_no_reader(
+        tmp_path: Path) -> None:
+    import threading
+
+    db = tmp_path / "jobs.sqlite"
+    store = JobStore(db)
+    job_id = store.submit("run", {"task": 8}, "me", queue=10)
+    holder = sqlite3.connect(db, isolation_level=None)
+    holder.execute("BEGIN IMMEDIATE")  # a worker's long commit holds the write lock
+    submitted: list[str] = []
+    writer = threading.Thread(target=lambda: submitted.append(
+        store.submit("run", {"task": 1}, "me", queue=10)))
+    writer.start()
+    time.sleep(0.3)  # lets the writer reach its BEGIN and wait there
+    try:
+        # The writer waits for the lock in its thread; a read in this one is answered.
+        job = store.get(job_id)
+        assert job is not None and job.state == "queued" and not submitted
+    finally:
+        holder.execute("COMMIT")
+        holder.close()
+    writer.join(timeout=30)
+    assert len(submitted) == 1 and store.get(submitted[0]) is not None
+    store.close()

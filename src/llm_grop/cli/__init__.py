@@ -20,6 +20,7 @@ from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
 from llm_grop.cli.serve import serve
 from llm_grop.cli.sweep import sweep
+from llm_grop.entry import interrupted
 from llm_grop.errors import LLMGropError
 
 
@@ -64,6 +65,9 @@ def main(argv: list[str] | None = None) -> int:
         click.echo(f"llm-grop: error: {exc.filename or ''}: {exc.strerror or exc}", err=True)
         return 2
     except Exception as exc:  # noqa: BLE001 - the contract promises no traceback
+        if interrupted(exc):
+            click.echo("llm-grop: interrupted", err=True)
+            return 130
         if os.environ.get("LLM_GROP_DEBUG"):
             raise
         click.echo(f"llm-grop: internal error: {type(exc).__name__}: {exc} "

@@ -115,6 +115,8 @@ class DiningRoomEnv(gymnasium.Env):
             raise BadInput("use None or 'rgb_array'", param="render_mode", value=render_mode)
         if max_steps is not None and max_steps < 1:
             raise BadInput("must be at least 1 (or None)", param="max_steps", value=max_steps)
+        if not isinstance(chairs, int) or chairs < 0:
+            raise BadInput("must be a whole number, 0 or more", param="chairs", value=chairs)
         if camera:
             warnings.warn("DiningRoomEnv(camera=True) is deprecated and will be removed in "
                           "the next minor release: use render_mode='rgb_array' and "

@@ -35,8 +35,10 @@ import math
 import os
 import random
 import re
+import threading
 import time
 from collections.abc import Mapping
+from types import ModuleType
 from typing import Any
 
 import httpx
@@ -58,6 +60,22 @@ _MAX_DETAIL = 200
 _ERRNO_PREFIX = re.compile(r"^\[Errno -?\d+\]\s*")
 
 
+
+def _http_modules() -> tuple[ModuleType, ...]:
+    """The HTTP client libraries the SDK may speak through: httpx, and httpx2 (a fork
+    with its own exception classes) that newer ``openai`` releases use."""
+    try:
+        import httpx2
+    except ImportError:
+        return (httpx,)
+    return (httpx, httpx2)
+
+
+#: A timeout, and any failure, of the HTTP client while an answer is read.
+_TIMEOUTS: tuple[type[Exception], ...] = tuple(m.TimeoutException for m in _http_modules())
+_HTTP_ERRORS: tuple[type[Exception], ...] = tuple(m.HTTPError for m in _http_modules())
+
+
 class OpenAILLM:
     """A chat model behind an OpenAI-compatible HTTP endpoint.
 
@@ -74,8 +92,10 @@ class OpenAILLM:
         self._max_retries = options.max_retries
         self._timeout_s = options.timeout_s
         self._max_bytes = options.max_answer_bytes
-        #: When the call under way must end (:func:`time.monotonic`; none between calls).
-        self._deadline = math.inf
+        #: When this thread's latest call must end (``deadline``, a :func:`time.monotonic`
+        #: time), which the response hook reads: per thread, as calls in two threads have
+        #: deadlines of their own.
+        self._call = threading.local()
         self._jitter = random.Random()
         try:
             # base_url=None lets the SDK read OPENAI_BASE_URL.
@@ -117,7 +137,7 @@ class OpenAILLM:
             kwargs["response_format"] = {"type": "json_schema", "json_schema": {
                 "name": "answer", "schema": dict(schema), "strict": True}}
         start = time.perf_counter()
-        deadline = self._deadline = time.monotonic() + self._timeout_s
+        deadline = self._call.deadline = time.monotonic() + self._timeout_s
         try:
             response = self._retried(kwargs, deadline)
         except (openai.BadRequestError, openai.UnprocessableEntityError) as exc:
@@ -180,24 +200,31 @@ class OpenAILLM:
         remaining = deadline - time.monotonic()
         if remaining <= 0:
             raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
-        with self._client.chat.completions.with_streaming_response.create(
-                **kwargs, timeout=remaining) as raw:
-            chunks, size = [], 0
-            try:
-                for chunk in raw.iter_bytes():
-                    size += len(chunk)
-                    if size > self._max_bytes:
-                        raise _TooLarge(size)
-                    if time.monotonic() > deadline:
-                        raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
-                    chunks.append(chunk)
-            except httpx.TimeoutException:
-                raise openai.APITimeoutError(request=None) from None  # type: ignore[arg-type]
-            except httpx.HTTPError as exc:
-                # The connection broke in the middle of the answer: as if it never came.
-                raise openai.APIConnectionError(
-                    message=_one_line(exc),
-                    request=httpx.Request("POST", self.base_url)) from None
+        try:
+            with self._client.chat.completions.with_streaming_response.create(
+                    **kwargs, timeout=remaining) as raw:
+                chunks, size = [], 0
+                try:
+                    for chunk in raw.iter_bytes():
+                        size += len(chunk)
+                        if size > self._max_bytes:
+                            raise _TooLarge(size)
+                        if time.monotonic() > deadline:
+                            raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
+                        chunks.append(chunk)
+                except _TIMEOUTS:
+                    raise openai.APITimeoutError(request=None) from None  # type: ignore[arg-type]
+                except _HTTP_ERRORS as exc:
+                    # The connection broke in the middle of the answer: as if it never came.
+                    raise openai.APIConnectionError(
+                        message=_one_line(exc),
+                        request=httpx.Request("POST", self.base_url)) from None
+        except openai.APIConnectionError as exc:
+            # SDKs before 2.31 wrap an error raised in a response hook (:meth:`_read_other_
+            # body`) as a connection error, which would be retried; it is the hook's.
+            if isinstance(exc.__cause__, openai.OpenAIError):
+                raise exc.__cause__ from None
+            raise
         return json.loads(b"".join(chunks))
 
     def _read_other_body(self, response: httpx.Response) -> None:
@@ -212,9 +239,9 @@ class OpenAILLM:
             if len(body) > self._max_bytes:
                 response.close()
                 raise _TooLarge(len(body))
-            if time.monotonic() > self._deadline:
+            if time.monotonic() > getattr(self._call, "deadline", math.inf):
                 response.close()
-                raise httpx.ReadTimeout("the call's deadline passed", request=response.request)
+                raise openai.APITimeoutError(request=response.request)
         # httpx has no public way to hand back a body read in pieces; read() and .text
         # return what is stored here.
         response._content = bytes(body)

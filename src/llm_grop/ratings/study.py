@@ -44,6 +44,9 @@ MAX_INVITES = 1000
 LISTED_CELLS = 6
 #: White space kept above a drawing's plot frame when its title band is cut off, pixels.
 TITLE_CUT_MARGIN_PX = 12
+#: The plot frame's top edge spans at least 1/FRAME_FRACTION of a drawing's width, even
+#: for a deep table's narrow plot; no run of lettering is that long.
+FRAME_FRACTION = 8
 
 
 @dataclass(frozen=True)
@@ -103,15 +106,16 @@ def clean_png(data: bytes, where: str, *, drop_title: bool = False) -> bytes:
 
 def below_title(img: Image.Image) -> Image.Image:
     """``img``, a bench's drawing, from just above its plot frame down: without the title
-    and the list of objects over it. The frame is the first dark line across half the
-    picture, in its upper half (no lettering is one unbroken line); a picture without one
-    is kept whole."""
+    and the list of objects over it. The frame is the first dark line across
+    1/:data:`FRAME_FRACTION` of the picture's width, in its upper half (no lettering is
+    one unbroken line); a picture without one (a table ten times deeper than wide) is kept
+    whole."""
     ink = np.asarray(img.convert("L")) < 200
     height, width = ink.shape
     for y in range(height // 2):
         # The longest unbroken run of ink in the row, from where runs start and end.
         edges = np.flatnonzero(np.diff(np.concatenate(([0], ink[y].astype(np.int8), [0]))))
-        if edges.size and int((edges[1::2] - edges[::2]).max()) >= width // 2:
+        if edges.size and int((edges[1::2] - edges[::2]).max()) >= width // FRAME_FRACTION:
             top = y - TITLE_CUT_MARGIN_PX
             return img.crop((0, top, width, height)) if top > 0 else img
     return img

@@ -190,8 +190,7 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
     @app.post("/v1/runs", response_model=JobAnswer, status_code=202, responses=_ERRORS,
               summary="Start a simulated run as a job")
     def post_run(body: RunBody, request: Request, response: Response) -> JobAnswer:
-        job = service.jobs.get(service.submit("run", body, client(request)))
-        assert job is not None
+        job = service.get(service.submit("run", body, client(request)), "run")
         response.headers["Location"] = f"/v1/runs/{job.id}"
         return service.run(job)
 
@@ -205,7 +204,8 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
     def cancel_run(job_id: str) -> JobAnswer:
         service.get(job_id, "run")
         job = service.jobs.cancel(job_id)
-        assert job is not None
+        if job is None:  # pruned meanwhile
+            raise Refused(404, f"no run job {job_id!r} on this server")
         return service.run(job)
 
     @app.get("/v1/runs/{job_id}/events", summary="A run's progress as server-sent events",

@@ -12,16 +12,15 @@ attempts, so every accepted job reaches a terminal state.
 
 from __future__ import annotations
 
-import functools
 import json
 import secrets
 import sqlite3
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Concatenate, Literal, ParamSpec, TypeVar
+from typing import Any, Literal
 
 from llm_grop import database
 from llm_grop.database import transaction
@@ -33,6 +32,8 @@ State = Literal["queued", "running", "done", "failed", "cancelled"]
 TERMINAL: frozenset[str] = frozenset({"done", "failed", "cancelled"})
 #: Attempts a job gets when its worker or the server dies under it; then it fails.
 MAX_ATTEMPTS = 3
+#: Ended jobs deleted per transaction when old ones are pruned (their videos with them).
+PRUNE_BATCH = 20
 #: Queue order: answers a client waits for go before runs.
 PRIORITY: dict[str, int] = {"arrange": 0, "plan": 0, "run": 1}
 
@@ -81,39 +82,38 @@ def _job(row: sqlite3.Row) -> Job:
                bool(row["cancel"]))
 
 
-_P = ParamSpec("_P")
-_R = TypeVar("_R")
-
-
-def _locked(method: Callable[Concatenate[JobStore, _P], _R]
-            ) -> Callable[Concatenate[JobStore, _P], _R]:
-    """``method`` run holding the store's lock: the web server calls the store from its
-    worker threads, and a transaction must never interleave with another's on the one
-    connection."""
-    @functools.wraps(method)
-    def locked(self: JobStore, *args: _P.args, **kwargs: _P.kwargs) -> _R:
-        with self.lock:
-            return method(self, *args, **kwargs)
-    return locked
-
-
 class JobStore:
     """The jobs in the database at ``path`` (made if missing). Its methods may be called
-    from several threads; they take turns on the one connection."""
+    from any thread: each thread has a connection of its own, so a call that waits on
+    another's write (a worker's video) holds up no reader."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        self.conn = database.connect(JOBS, path, create=True)
-        self.lock = threading.RLock()
+        self._local = threading.local()
+        self._opened: list[sqlite3.Connection] = []
+        self._opening = threading.Lock()
+        self.conn  # noqa: B018 - opened (and migrated) now: a bad file is reported at once
 
-    @_locked
+    @property
+    def conn(self) -> sqlite3.Connection:
+        """This thread's connection to the database, opened on its first use."""
+        conn: sqlite3.Connection | None = getattr(self._local, "conn", None)
+        if conn is None:
+            conn = database.connect(JOBS, self.path, create=True)
+            self._local.conn = conn
+            with self._opening:
+                self._opened.append(conn)
+        return conn
+
     def close(self) -> None:
-        """Close the connection."""
-        self.conn.close()
+        """Close every thread's connection."""
+        with self._opening:
+            for conn in self._opened:
+                conn.close()
+            self._opened.clear()
 
     # ---- clients ------------------------------------------------------------------------
 
-    @_locked
     def submit(self, kind: Kind, body: Mapping[str, Any], client: str, *, queue: int,
                per_client: int | None = None) -> str:
         """Accept a job and return its id; :class:`Overloaded` when ``queue`` jobs wait
@@ -137,13 +137,11 @@ class JobStore:
                       (job_id, kind, json.dumps(body), client, PRIORITY[kind], time.time()))
         return job_id
 
-    @_locked
     def get(self, job_id: str) -> Job | None:
         """The job ``job_id``, or ``None``."""
         row = self.conn.execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
         return _job(row) if row is not None else None
 
-    @_locked
     def cancel(self, job_id: str) -> Job | None:
         """Cancel a job: a queued one at once, a running one when its worker is stopped
         (:meth:`to_cancel`); an ended one stays as it is."""
@@ -155,33 +153,28 @@ class JobStore:
                       (job_id,))
         return self.get(job_id)
 
-    @_locked
     def file(self, job_id: str, name: str) -> tuple[str, bytes] | None:
         """A job's file: ``(media type, bytes)``, or ``None``."""
         row = self.conn.execute("SELECT media_type, data FROM files WHERE job = ? AND "
                                 "name = ?", (job_id, name)).fetchone()
         return (row[0], bytes(row[1])) if row is not None else None
 
-    @_locked
     def files(self, job_id: str) -> list[str]:
         """The names of a job's files."""
         return [r[0] for r in self.conn.execute(
             "SELECT name FROM files WHERE job = ? ORDER BY name", (job_id,))]
 
-    @_locked
     def events(self, job_id: str, after: int = 0) -> list[tuple[int, float, str]]:
         """A job's progress events after number ``after``: ``(seq, time, message)``."""
         return [(r[0], r[1], r[2]) for r in self.conn.execute(
             "SELECT seq, at, message FROM events WHERE job = ? AND seq > ? ORDER BY seq",
             (job_id, after))]
 
-    @_locked
     def recent(self, ids: list[str]) -> list[Job]:
         """The jobs among ``ids`` that exist, newest first."""
         jobs = [j for j in (self.get(i) for i in ids) if j is not None]
         return sorted(jobs, key=lambda j: j.created, reverse=True)
 
-    @_locked
     def counts(self) -> dict[str, int]:
         """How many jobs are in each state."""
         return {r[0]: r[1] for r in self.conn.execute(
@@ -189,7 +182,6 @@ class JobStore:
 
     # ---- workers ------------------------------------------------------------------------
 
-    @_locked
     def claim(self, worker: int) -> Job | None:
         """The next queued job, now running under a fresh claim for process ``worker``."""
         # Idle workers look often: a read takes no lock, so only a likely claim writes.
@@ -210,7 +202,6 @@ class JobStore:
                             "was interrupted")
         return job
 
-    @_locked
     def event(self, job: Job, message: str) -> None:
         """Add a progress event to ``job`` (nothing if its claim is no longer held)."""
         with transaction(self.conn) as c:
@@ -219,7 +210,6 @@ class JobStore:
                           "coalesce(max(seq), 0) + 1, ?, ? FROM events WHERE job = ?",
                           (job.id, time.time(), message, job.id))
 
-    @_locked
     def finish(self, job: Job, result: Mapping[str, Any],
                files: Mapping[str, tuple[str, bytes]]) -> bool:
         """Record ``job`` done with ``result`` and ``files`` (name -> media type, bytes);
@@ -233,7 +223,6 @@ class JobStore:
                       (json.dumps(result), time.time(), job.id))
         return True
 
-    @_locked
     def fail(self, job: Job, status: int, error: str) -> bool:
         """Record ``job`` failed with HTTP ``status`` and the one-line ``error``; ``False``
         if its claim is no longer held."""
@@ -251,13 +240,11 @@ class JobStore:
 
     # ---- the supervisor -----------------------------------------------------------------
 
-    @_locked
     def running(self) -> list[Job]:
         """Every running job."""
         return [_job(r) for r in self.conn.execute(
             "SELECT * FROM jobs WHERE state = 'running' ORDER BY rowid")]
 
-    @_locked
     def end(self, job: Job, state: Literal["failed", "cancelled"], status: int | None,
             error: str) -> None:
         """End a running job whose worker was stopped (over time, or cancelled)."""
@@ -266,7 +253,6 @@ class JobStore:
                       "WHERE id = ? AND claim = ? AND state = 'running'",
                       (state, status, error, time.time(), job.id, job.claim))
 
-    @_locked
     def orphaned(self, job: Job, why: str) -> None:
         """A running job whose worker died (``why``): queued again, or failed after
         :data:`MAX_ATTEMPTS` attempts (cancelled if the client cancelled it)."""
@@ -288,16 +274,21 @@ class JobStore:
                           "WHERE id = ? AND claim = ? AND state = 'running'",
                           (job.id, job.claim))
 
-    @_locked
-    def prune(self, before: float) -> int:
+    def prune(self, before: float, batch: int = PRUNE_BATCH) -> int:
         """Forget every ended job that ended before ``before`` (a :func:`time.time`), with
-        its files and events; how many. Queued and running jobs are never pruned."""
-        with transaction(self.conn) as c:
-            gone = c.execute("DELETE FROM jobs WHERE state IN ('done', 'failed', 'cancelled') "
-                             "AND finished < ?", (before,)).rowcount
-        return int(gone)
+        its files and events; how many. Queued and running jobs are never pruned. Each
+        ``batch`` jobs go in a transaction of their own, so that workers and clients wait
+        for one batch at most, never for the whole backlog."""
+        gone = 0
+        while True:
+            with transaction(self.conn) as c:
+                n = c.execute("DELETE FROM jobs WHERE rowid IN (SELECT rowid FROM jobs WHERE "
+                              "state IN ('done', 'failed', 'cancelled') AND finished < ? "
+                              "LIMIT ?)", (before, batch)).rowcount
+            gone += n
+            if n < batch:
+                return gone
 
-    @_locked
     def recover(self) -> int:
         """Re-queue (or fail, after :data:`MAX_ATTEMPTS`) every job a previous server left
         running; how many there were. Call it before any worker starts."""

@@ -86,7 +86,8 @@ class Service:
         deadline = loop.time() + wait
         while True:
             job = await run_in_threadpool(self.jobs.get, job_id)
-            assert job is not None
+            if job is None:  # pruned while it was waited for
+                raise Refused(404, f"no job {job_id!r} on this server")
             if job.terminal:
                 return job
             if loop.time() > deadline:

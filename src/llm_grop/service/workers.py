@@ -104,7 +104,7 @@ class WorkerPool:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._store: JobStore | None = None
-        self._next_prune = 0.0
+        self._next_prune = 0.0  # time.monotonic()
 
     def start(self) -> None:
         """Start the workers and the supervisor."""
@@ -173,9 +173,9 @@ class WorkerPool:
         for job in store.running():
             if job.worker not in live:
                 store.orphaned(job, "its worker died")
-        if self.config.keep_s is not None and now >= self._next_prune:
-            self._next_prune = now + PRUNE_S
+        if self.config.keep_s is not None and time.monotonic() >= self._next_prune:
             gone = store.prune(now - self.config.keep_s)
+            self._next_prune = time.monotonic() + PRUNE_S  # a failed prune is tried again
             if gone:
                 log.info("pruned %d job(s) that ended over %g days ago", gone,
                          self.config.keep_s / 86400)
