@@ -39,7 +39,7 @@ def test_interrupts_at_random_moments_print_one_line_and_no_traceback(tmp_path: 
 
 
 def test_an_interrupt_inside_an_extensions_start_counts_as_an_interrupt() -> None:
-    from llm_grop.entry import interrupted
+    from llm_grop.errors import interrupted
 
     # pybind11 modules (mujoco's) stopped by Ctrl-C while they initialise raise this.
     try:

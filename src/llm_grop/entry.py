@@ -16,6 +16,8 @@ import sys
 import threading
 from types import FrameType
 
+from llm_grop.errors import interrupted
+
 #: Exit statuses of an interrupted command: 128 plus the signal's number.
 INTERRUPTED = 130
 TERMINATED = 143
@@ -55,20 +57,6 @@ def main() -> int:
     if code in (INTERRUPTED, TERMINATED):
         _exit(code)
     return code
-
-
-def interrupted(exc: BaseException) -> bool:
-    """Whether ``exc`` is, or was caused by, an interrupt: an extension module that Ctrl-C
-    stops while it initialises reports ``ImportError: initialization failed`` from the
-    ``KeyboardInterrupt``."""
-    seen: set[int] = set()
-    cause: BaseException | None = exc
-    while cause is not None and id(cause) not in seen:
-        if isinstance(cause, KeyboardInterrupt):
-            return True
-        seen.add(id(cause))
-        cause = cause.__cause__ or cause.__context__
-    return False
 
 
 def _in_cleanup(frame: FrameType | None) -> bool:

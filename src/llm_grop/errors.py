@@ -85,3 +85,17 @@ class Infeasible(LLMGropError):
     """Nothing feasible exists: no arrangement or plan satisfies the constraints (exit 1)."""
 
     exit_code = 1
+
+
+def interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was caused by, an interrupt: an extension module that Ctrl-C
+    stops while it initialises reports ``ImportError: initialization failed`` from the
+    ``KeyboardInterrupt``."""
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return True
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    return False

@@ -20,8 +20,7 @@ from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
 from llm_grop.cli.serve import serve
 from llm_grop.cli.sweep import sweep
-from llm_grop.entry import interrupted
-from llm_grop.errors import LLMGropError
+from llm_grop.errors import LLMGropError, interrupted
 
 
 @click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
