@@ -51,7 +51,7 @@ from llm_grop.llm.registry import BACKENDS
 from llm_grop.methods.registry import METHODS
 from llm_grop.simulation.registry import SIMULATORS
 from llm_grop.world.contract import TrialRow
-from llm_grop.world.jsonio import write_bytes, write_json
+from llm_grop.world.jsonio import write_bytes, write_json, write_text
 from llm_grop.world.serialize import read_doc
 
 log = logging.getLogger(__name__)
@@ -376,8 +376,9 @@ def write_reports(out: Path, rows: Sequence[TrialRow], seed: int = 0) -> Report:
     counted = [r for r in rows if r.status != "llm-failed"]
     paired = paired_by_trial(counted, summary.method_names, seed)
     write_json(out / "summary.json", summary_to_dict(summary, paired))
-    (out / "summary.md").write_text(summary_markdown(summary, paired=paired),
-                                    encoding="utf-8")
+    # Atomic as the other reports: a run that resumes this directory as soon as this
+    # one lets go of its lock may write them at the same moment.
+    write_text(out / "summary.md", summary_markdown(summary, paired=paired))
     plot_rating_vs_time(summary, out / "fig3_rating_vs_time.png")
     plot_rating_per_task(summary, out / "fig5_rating_per_task.png")
     return Report(summary, paired)

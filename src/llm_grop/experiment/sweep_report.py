@@ -17,7 +17,7 @@ from llm_grop.experiment.plots import plot_sweep
 from llm_grop.experiment.runner import Report, read_rows, write_reports
 from llm_grop.experiment.summary import md_row, mean_se, rate_text, summary_to_dict
 from llm_grop.experiment.sweep import Sweep
-from llm_grop.world.jsonio import write_json
+from llm_grop.world.jsonio import write_json, write_text
 
 #: What :func:`write_sweep_reports` writes into the sweep's directory.
 FILES = ("summary.md", "summary.json", "fig_sweep.png")
@@ -40,7 +40,7 @@ def write_sweep_reports(out: Path, sweep: Sweep, seeds: Sequence[int]) -> list[C
                           write_reports(out / cell.name, read_rows(out / cell.name), seed))
                for cell, seed in zip(sweep.cells, seeds, strict=True)]
     write_json(out / "summary.json", sweep_to_dict(sweep, reports))
-    (out / "summary.md").write_text(sweep_markdown(sweep, reports), encoding="utf-8")
+    write_text(out / "summary.md", sweep_markdown(sweep, reports))
     plot_sweep([(r.name, r.report.summary) for r in reports], out / "fig_sweep.png")
     return reports
 
