@@ -39,6 +39,7 @@ from llm_grop.ratings.store import (
     image_url,
 )
 from llm_grop.web import GONE, TOO_LARGE, read_body, replaying, same_origin
+from llm_grop.world.datafile import problem_line
 
 COOKIE = "llm_grop_session"
 CSRF_HEADER = "X-CSRF-Token"
@@ -183,7 +184,7 @@ def create_app(db: Path, *, admin_token: str, ttl_s: float = SESSION_TTL_S) -> F
 
     @app.exception_handler(RequestValidationError)
     async def invalid(request: Request, exc: RequestValidationError) -> Response:
-        return await refused(request, Refused(422, _one_line(exc)))
+        return await refused(request, Refused(422, problem_line(exc.errors(), exc.body)))
 
     @app.exception_handler(HTTPException)
     async def http_error(request: Request, exc: HTTPException) -> Response:
@@ -324,13 +325,3 @@ def _check_admin(request: Request, token: str) -> None:
 def _set_cookie(response: Response, request: Request, session: Session, ttl_s: float) -> None:
     response.set_cookie(COOKIE, session.token, max_age=int(ttl_s), path="/", httponly=True,
                         samesite="strict", secure=request.url.scheme == "https")
-
-
-def _one_line(exc: RequestValidationError) -> str:
-    """The first validation error as ``field: message``."""
-    errors = exc.errors()
-    if not errors:
-        return "invalid request"
-    first = errors[0]
-    where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "body"
-    return f"{where}: {first.get('msg', 'invalid')}"

@@ -23,6 +23,7 @@ from typing import Any
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response, StreamingResponse
+from pydantic import BaseModel
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
 
@@ -114,7 +115,8 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
     @app.exception_handler(RequestValidationError)
     async def invalid(request: Request, exc: RequestValidationError) -> Response:
-        return await refused(request, Refused(422, one_line(exc.errors())))
+        model = _BODIES.get(request.url.path.rstrip("/"))
+        return await refused(request, Refused(422, one_line(exc.errors(), exc.body, model)))
 
     @app.exception_handler(HTTPException)
     async def http_error(request: Request, exc: HTTPException) -> Response:
@@ -241,6 +243,11 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
     add_playground(app, service)
     return app
+
+
+#: The body each endpoint takes, whose keys an unknown one is matched against.
+_BODIES: dict[str, type[BaseModel]] = {"/v1/arrangements": ArrangeBody, "/v1/plans": PlanBody,
+                                       "/v1/runs": RunBody}
 
 
 async def _events(jobs: JobStore, job_id: str, after: int) -> AsyncIterator[str]:

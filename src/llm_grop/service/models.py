@@ -10,6 +10,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
 from llm_grop.world.contract import ArrangementDoc, RelationDoc, RunDoc
+from llm_grop.world.datafile import problem_line
 from llm_grop.world.plan_doc import PlanJSON
 from llm_grop.world.request import MAX_DINERS, MAX_REQUEST_CHARS
 from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
@@ -218,14 +219,9 @@ def reading(doc: ArrangementDoc) -> Reading:
                    relations=list(doc.relations))
 
 
-def one_line(errors: Sequence[Any]) -> str:
-    """The first of pydantic's validation ``errors`` as ``field: message``, in words a
-    client can act on."""
-    if not errors:
-        return "request body: invalid"
-    first = errors[0]
-    where = ".".join(str(p) for p in first.get("loc", ()) if p != "body") or "request body"
-    message = str(first.get("msg", "invalid")).removeprefix("Value error, ")
-    if first.get("type") == "extra_forbidden":
-        message = "unknown field"
-    return f"{where}: {message}"
+def one_line(errors: Sequence[Any], raw: Any = None, model: Any = None,
+             where: str | None = "body") -> str:
+    """The first of pydantic's validation ``errors`` about the body ``raw`` (of ``model``)
+    as ``field: reason``, in the words of the project's data files
+    (:func:`~llm_grop.world.datafile.problem_line`)."""
+    return problem_line(errors, raw, model, where=where)

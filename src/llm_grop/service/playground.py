@@ -115,7 +115,7 @@ def add_playground(app: FastAPI, service: Service) -> None:
             kind, body = _body(action, fields)
         except ValidationError as exc:
             return await run_in_threadpool(page, request, 422, form=_form(fields),
-                                           error=one_line(exc.errors()))
+                                           error=one_line(exc.errors(), where=None))
         except ValueError as exc:
             return await run_in_threadpool(page, request, 422, form=_form(fields),
                                            error=str(exc))

@@ -80,6 +80,25 @@ def first_problem(errors: Sequence[Any], raw: Any, label_key: str,
     return field_path(raw, loc, label_key), _reason(err, _keys_at(model, loc[:-1]))
 
 
+def problem_line(errors: Sequence[Any], raw: Any, model: Any = None, *,
+                 label_key: str = "name", where: str | None = "body") -> str:
+    """The first of a web request's validation ``errors`` as one line ``field: reason``,
+    in the words of :func:`first_problem`; ``raw`` is the parsed body, and a location
+    inside it starts with ``where`` (FastAPI's ``body``; ``None``: the locations are the
+    body's own), which the line leaves out."""
+    inside = list(errors) if where is None else [
+        dict(e, loc=tuple(e.get("loc", ()))[1:]) for e in errors
+        if tuple(e.get("loc", ()))[:1] == (where,)]
+    if not inside or not isinstance(raw, dict):
+        if not errors:
+            return "request body: not valid"
+        first = errors[0]
+        named = ".".join(str(k) for k in first.get("loc", ()) if k != where)
+        return f"{named or 'request body'}: {_reason(dict(first, loc=()))}"
+    path, reason = first_problem(inside, raw, label_key, model)
+    return f"{'request body' if path == 'top level' else path}: {reason}"
+
+
 #: What a type error expected, in plain words.
 _EXPECTED = {
     "string_type": "text", "int_type": "a whole number", "int_parsing": "a whole number",
