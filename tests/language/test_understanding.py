@@ -98,7 +98,7 @@ def test_an_unknown_word_never_refuses_before_the_llm_is_asked(chat_server: Chat
     assert [it.source for it in request.items] == ["request", "llm"]
     assert request.guessed == ("soup spoon",)
     assert request.warnings == ("the openai LLM chose what the request does not say: 1 soup "
-                                "spoon (for 'something to eat soup with'); --no-guess refuses "
+                                "spoon (for 'something to eat soup with'); guess=False refuses "
                                 "this",)
 
 

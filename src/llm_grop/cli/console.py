@@ -9,6 +9,7 @@ from rich.table import Table as RichTable
 from rich.text import Text
 
 from llm_grop.arrangement.pipeline import ArrangementResult
+from llm_grop.cli.flags import cli_words
 from llm_grop.world.plan import ExecutedStep, RunResult
 
 #: The longest warning line printed, in characters; a longer warning is cut with "…" (the
@@ -28,7 +29,7 @@ def print_warnings(warnings: Iterable[str], console: Console, where: str = "") -
     to :data:`WARNING_CHARS` characters; never rich markup, never wrapped."""
     for w in warnings:
         line = Text("warning:", style="yellow")
-        line.append(" " + one_line(f"{where}: {w}" if where else w))
+        line.append(" " + one_line(cli_words(f"{where}: {w}" if where else w)))
         console.print(line, soft_wrap=True, highlight=False)
 
 

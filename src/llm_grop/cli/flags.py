@@ -33,11 +33,17 @@ def flag(param: str) -> str:
     return FLAGS.get(param, "--" + param.replace("_", "-"))
 
 
-def reworded(exc: LLMGropError) -> str:
-    """``exc``'s one-line message in the command line's words."""
-    text = getattr(exc, "detail", None) or str(exc)
+def cli_words(text: str) -> str:
+    """``text`` (a message or a warning of the API) with the command line's words for
+    the API's phrases in it (:data:`PHRASES`)."""
     for api, words in PHRASES.items():
         text = text.replace(api, words)
+    return text
+
+
+def reworded(exc: LLMGropError) -> str:
+    """``exc``'s one-line message in the command line's words."""
+    text = cli_words(getattr(exc, "detail", None) or str(exc))
     if not isinstance(exc, BadInput) or getattr(exc, "param", None) is None:
         return text
     name = flag(exc.param)

@@ -131,7 +131,7 @@ def guess_warning(objects: Sequence[ReadObject], backend: str) -> str:
     chosen = ", ".join(f"{o.count} {o.name}" + (f" (for {o.words!r})" if o.words else "")
                        for o in objects)
     return (f"the {backend} LLM chose what the request does not say: {chosen}; "
-            "--no-guess refuses this")
+            "guess=False refuses this")
 
 
 @dataclass(frozen=True)
