@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import subprocess
 from pathlib import Path
 
 import jsonschema
@@ -138,16 +139,23 @@ def test_user_task_file(tmp_path: Path, capsys) -> None:
     assert [r["task"] for r in rows] == [9, 9] and "image" not in rows[0]
 
 
+def _bench_process(out: Path, workers: int, stdout: int) -> subprocess.Popen[bytes]:
+    """``bench`` with :data:`BASE` into ``out``, started in a process of its own (its
+    stderr piped)."""
+    import sys
+
+    cmd = [sys.executable, "-c", "import sys; from llm_grop.cli import main; "
+           "sys.exit(main(sys.argv[1:]))", *BASE, "--out", str(out), "--workers", str(workers)]
+    return subprocess.Popen(cmd, stdout=stdout, stderr=subprocess.PIPE)
+
+
 def test_ctrl_c_loses_no_finished_trial(finished: Path, tmp_path: Path) -> None:
     import signal
     import subprocess
-    import sys
     import time
 
     out = tmp_path / "interrupted"
-    cmd = [sys.executable, "-c", "import sys; from llm_grop.cli import main; "
-           "sys.exit(main(sys.argv[1:]))", *BASE, "--out", str(out), "--workers", "2"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = _bench_process(out, 2, subprocess.PIPE)
     rows = out / "trials.jsonl"
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:
@@ -207,13 +215,10 @@ def test_an_unusable_default_cache_is_left_out_with_a_warning(tmp_path: Path, mo
 def test_a_second_bench_on_one_directory_is_refused(finished: Path, tmp_path: Path,
                                                     capsys) -> None:
     import subprocess
-    import sys
     import time
 
     out = tmp_path / "shared"
-    cmd = [sys.executable, "-c", "import sys; from llm_grop.cli import main; "
-           "sys.exit(main(sys.argv[1:]))", *BASE, "--out", str(out), "--workers", "1"]
-    first = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    first = _bench_process(out, 1, subprocess.DEVNULL)
     lock = out / ".lock"
     deadline = time.monotonic() + 120
     while not (lock.exists() and lock.read_text().strip()) and first.poll() is None:

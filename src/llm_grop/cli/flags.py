@@ -17,7 +17,6 @@ FLAGS: dict[str, str] = {
     "planner.w": "--weight",
     "options.preferences": "--prefer",
     "video_path": "--video",
-    "catalog_files": "--catalog",
 }
 
 #: API phrases inside messages -> their command-line words.
