@@ -20,13 +20,13 @@ from pathlib import Path
 
 from llm_grop import BackendOptions, arrange, make_llm
 from llm_grop.errors import LLMGropError, ReplayMissing
-from llm_grop.llm.base import SamplingParams
+from llm_grop.llm.base import BaseLLM, SamplingParams
 from llm_grop.llm.record import LLMCallRecord, append_record
 from llm_grop.llm.registry import create_llm
 from llm_grop.llm.replay import ReplayLLM
 
 
-class FillIn:
+class FillIn(BaseLLM):
     """Answers from a record file, and from the embedded model (appending its answer to
     the file) for a call the file lacks."""
 

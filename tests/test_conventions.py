@@ -57,8 +57,8 @@ def test_bad_input_through_the_api_is_a_value_error() -> None:
     (lambda api: api.plan(task=8, feasibility="optimistic", llm="replay"),
      "feasibility: unknown profile 'optimistic'; choose from "),
     (lambda api: api.GropOptions(fidelity_w_s_per_cm=-1.0),
-     "planner.fidelity_w_s_per_cm: must be a finite number >= 0 (seconds per centimetre), "
-     "got -1"),
+     "fidelity_weight: must be a finite number >= 0 (seconds per centimetre), got -1"),
+    (lambda api: api.run(task=8, m=0, llm="replay"), "m=0: must be at least 1"),
     (lambda api: api.create_simulator("kinematic2d", grasp="suction"),
      "grasp='suction': needs the mujoco simulator (got 'kinematic2d')"),
 ])
@@ -81,7 +81,7 @@ def test_api_errors_name_the_api_parameters(call, message: str) -> None:
     (["run", "--task", "8", "--method", "nope"], "--method: unknown method 'nope' (available: "),
     (["run", "--task", "8", "--table", "120x80"], "--table: 120 x 80 m is not a dining table"),
     (["run", "--task", "8", "--fidelity-weight", "inf"],
-     "--fidelity-weight: must be a finite number >= 0"),
+     "--fidelity-weight inf: expected a finite number"),
     (["run", "--task", "8", "--grasp", "friction"],
      "--grasp friction: needs the mujoco simulator (got 'kinematic2d')"),
     (["bench", "--methods", "grop,nope", "--out", "{tmp}/b"], "--methods: unknown method 'nope'"),

@@ -252,7 +252,7 @@ def test_method_registered_at_run_time_reaches_spawned_workers(tmp_path: Path) -
         if __name__ == "__main__":
             register_method(MINE)
             exp = Experiment(tasks=(1,), trials=2, methods=("mine",),
-                             settings=TrialSettings(images=None))
+                             settings=TrialSettings.of(llm="replay"))
             outcome = run_experiment(exp, Path(sys.argv[1]) / "bench", workers=2)
             print(json.dumps([[r.method, r.trial] for r in outcome.rows]))
         """, tmp_path, helpers)
@@ -446,7 +446,7 @@ def test_entry_defined_in_an_interactive_main_is_refused_before_the_bench(tmp_pa
         register_simulator("mine", Mine)
         out = Path(sys.argv[1])
         try:
-            run_experiment(Experiment((1,), 1, ("grop",), TrialSettings(simulator="mine")),
+            run_experiment(Experiment((1,), 1, ("grop",), TrialSettings.of(simulator="mine")),
                            out, workers=2)
         except BadInput as exc:
             print(exc)

@@ -42,6 +42,7 @@ if TYPE_CHECKING:
     from llm_grop.planning.utility import GropOptions
     from llm_grop.render.room import draw_run
     from llm_grop.render.table import draw_arrangement
+    from llm_grop.settings import RunSettings
     from llm_grop.simulation.registry import register_simulator
     from llm_grop.world.arrangement import Arrangement, Configuration, Item, Placement
     from llm_grop.world.catalog import Catalog, ObjectSpec
@@ -68,6 +69,7 @@ _EXPORTS: dict[str, str] = {
     "plan_to_dict": "llm_grop.api",
     "plan_from_dict": "llm_grop.api",
     "understand": "llm_grop.api",
+    "RunSettings": "llm_grop.settings",
     "Request": "llm_grop.world.request",
     "ArrangeOptions": "llm_grop.arrangement.pipeline",
     "ArrangementResult": "llm_grop.arrangement.pipeline",
@@ -128,6 +130,7 @@ __all__ = [
     "Relation",
     "Request",
     "RunResult",
+    "RunSettings",
     "SamplingParams",
     "Scene",
     "Table",

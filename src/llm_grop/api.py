@@ -6,21 +6,34 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from os import PathLike
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from llm_grop.arrangement.diners import seat_items, seat_table
-from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions, arrange_items
+from llm_grop.arrangement.pipeline import (  # noqa: F401 - ArrangeOptions: public name
+    ArrangementResult,
+    ArrangeOptions,
+    arrange_items,
+)
 from llm_grop.arrangement.stated import check_stated
+from llm_grop.assembly import (
+    Bases,
+    arrange_options,
+    call_log,
+    check_backend,
+    execution_policy,
+    make_backend,
+    make_simulator,
+    planner_options,
+    sampling,
+    settle,
+)
 from llm_grop.errors import BadInput
-from llm_grop.execution import ExecutionPolicy
-from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.language import understanding
-from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
-from llm_grop.llm.cache import LLMCache
+from llm_grop.llm.base import LLM, BackendOptions, CallLog
 from llm_grop.llm.registry import create_llm
 from llm_grop.methods.registry import available_methods, get_method
-from llm_grop.simulation.registry import DEFAULT_SIMULATOR, available_simulators
+from llm_grop.settings import DEFAULTS, RunSettings
+from llm_grop.simulation.registry import available_simulators
 from llm_grop.world.arrangement import Arrangement, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import Request, items_from_names
@@ -35,17 +48,18 @@ if TYPE_CHECKING:
     from llm_grop.simulation.base import Simulator
     from llm_grop.world.plan import RunResult
 
-__all__ = ["PlanResult", "arrange", "available_methods", "available_simulators", "execute",
-           "make_llm", "plan", "plan_from_dict", "plan_to_dict", "resolve_items", "run",
-           "understand"]
+__all__ = ["PlanResult", "RunSettings", "arrange", "available_methods",
+           "available_simulators", "execute", "make_llm", "plan", "plan_from_dict",
+           "plan_to_dict", "resolve_items", "run", "understand"]
 
 
 @dataclass(frozen=True)
 class PlanResult:
     """A task-motion plan from :func:`plan`, not yet executed: the method's name, the
     paper's task (``None`` for a free request), what the method was given (request, items,
-    table, seed), the arrangement and plan in their episode's scene, the planner's options
-    and the attempts per pick and place the executive allows the method."""
+    table, seed), the arrangement and plan in their episode's scene, the planner's options,
+    the attempts per pick and place the executive allows the method, and the settings it
+    was planned with (:func:`execute`'s default)."""
 
     method: str
     task: int | None
@@ -53,6 +67,7 @@ class PlanResult:
     planned: PlannedEpisode
     planner: GropOptions | None
     manip_attempts: int
+    settings: RunSettings = DEFAULTS
 
 
 def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
@@ -62,138 +77,144 @@ def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
     ``record``, answering seeded calls asked before from the LLM cache in directory
     ``cache`` (:mod:`llm_grop.llm.cache`; ``None``: no cache)."""
     backend = create_llm(llm, options) if isinstance(llm, str) else llm
-    return CallLog(backend, Path(record) if record is not None else None,
-                   cache=LLMCache(cache) if cache is not None else None)
+    return call_log(backend, record=record, cache=cache)
 
 
 def resolve_items(request: str | None, task: int | None, catalog: Catalog,
                   tasks: Mapping[int, Task] | None = None) -> tuple[str, tuple[Item, ...]]:
     """The request's text and its items, from ``request`` (read by the catalog matcher
     alone) or ``task``: an id of ``tasks`` (default: the paper's Table I)."""
-    reading = understand(request, task=task, catalog=catalog, tasks=tasks, llm=None)
+    reading = _understand(request, DEFAULTS.with_values(task=task), catalog, tasks, None,
+                          None, None)
     return reading.text, reading.items
 
 
-def understand(request: str | None = None, *, task: int | None = None,
-               catalog: Catalog | None = None, tasks: Mapping[int, Task] | None = None,
-               llm: str | LLM | CallLog | Callable[[], CallLog] | None = "embedded",
-               llm_options: BackendOptions | None = None, seed: int = 0,
-               params: SamplingParams | None = None,
-               on_event: Callable[[str], None] | None = None, guess: bool = True,
-               table: Table | None = None) -> Request:
-    """What ``request`` (or the paper's Table I ``task``, an id of ``tasks``) asks for: its
-    items, the relations it states, and how they were read.
+#: :func:`understand`'s ``llm`` when none is given: the backend the settings name.
+_SETTINGS_LLM: Any = object()
+
+
+def understand(request: str | None = None, settings: RunSettings | None = None, *,
+               llm: str | LLM | CallLog | Callable[[], CallLog] | None = _SETTINGS_LLM,
+               catalog: Catalog | None = None, table: Table | None = None,
+               on_event: Callable[[str], None] | None = None, **overrides: Any) -> Request:
+    """What ``request`` (or the paper's Table I task ``task=N``) asks for: its items, the
+    relations it states, and how they were read.
 
     The catalog matcher reads the request alone when it accounts for every word; otherwise
-    ``llm`` reads the whole request (:mod:`llm_grop.language.understanding`), and is made
-    only then; ``llm=None`` refuses such a request with the words the matcher could not
-    read. ``seed`` fixes that call's seed. ``guess=False`` refuses a reading with objects
-    the request does not name. The stated relations are checked with clingo, and their
-    distances against ``table`` when given.
+    an LLM reads the whole request (:mod:`llm_grop.language.understanding`): ``llm`` (an
+    :class:`LLM`, a :class:`CallLog` or a function that makes one) or else the backend
+    the settings name (a name given as ``llm`` is that setting), made only then;
+    ``llm=None`` refuses such a request with the words the matcher could not read. ``settings`` and
+    ``overrides`` are :func:`plan`'s: ``seed`` fixes the LLM call's seed, ``guess=False``
+    refuses a reading with objects the request does not name, ``tasks`` replaces the
+    paper's Table I. The stated relations are checked with clingo, and their distances
+    against ``table`` when given.
     """
-    catalog = catalog or Catalog.load()
-    if task is not None:
-        t = get_task(task, tasks if tasks is not None else load_tasks())
+    refuse = llm is None
+    job = _Job.of(settings, None if refuse or llm is _SETTINGS_LLM else llm, None, overrides)
+    log: CallLog | Callable[[], CallLog] | None = None
+    if not refuse:
+        log = job.llm if isinstance(job.llm, CallLog) or callable(job.llm) and \
+            not isinstance(job.llm, LLM) else job.log
+    return _understand(request, job.settings, catalog, job.tasks, log, on_event, table)
+
+
+def _understand(request: str | None, s: RunSettings, catalog: Catalog | None,
+                tasks: Mapping[int, Task] | None,
+                log: CallLog | Callable[[], CallLog] | None,
+                on_event: Callable[[str], None] | None, table: Table | None) -> Request:
+    """:func:`understand` with its settings made."""
+    catalog = catalog or Catalog.load(s.catalog_files)
+    if s.task is not None:
+        t = get_task(s.task, tasks if tasks is not None else load_tasks(s.task_files))
         return Request(request or t.request, tuple(items_from_names(
-            t.objects, catalog, where=f"task {task}: objects")))
+            t.objects, catalog, where=f"task {s.task}: objects")))
     if request is None:
-        raise BadInput("request: give a request or a task number")
-    log: CallLog | Callable[[], CallLog] | None
-    if llm is None or isinstance(llm, CallLog) or callable(llm) and not isinstance(llm, LLM):
-        log = llm
-    else:
-        backend = llm
-        log = lambda: make_llm(backend, llm_options)  # noqa: E731
-    reading = understanding.understand(request, catalog, log, seed, params, on_event, guess)
+        raise BadInput("give a request or a task number", param="request")
+    reading = understanding.understand(request, catalog, log, s.seed, sampling(s), on_event,
+                                       s.guess)
     check_stated(reading, table)
     return reading
 
 
-def arrange(request: str | None = None, *, task: int | None = None,
-            llm: str | LLM | CallLog = "embedded", llm_options: BackendOptions | None = None,
-            table: Table | None = None, seed: int = 0, catalog: Catalog | None = None,
-            catalog_files: Sequence[str | PathLike[str]] = (),
-            options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
-            on_event: Callable[[str], None] | None = None, guess: bool = True,
-            cache: str | PathLike[str] | None = None) -> ArrangementResult:
-    """Arrange the objects of ``request`` (or of the paper's Table I ``task``) on ``table``.
+def arrange(request: str | None = None, settings: RunSettings | None = None, *,
+            llm: LLM | CallLog | None = None, table: Table | None = None,
+            catalog: Catalog | None = None, record: str | PathLike[str] | None = None,
+            on_event: Callable[[str], None] | None = None, **overrides: Any
+            ) -> ArrangementResult:
+    """Arrange the objects of ``request`` (or of the paper's Table I task ``task=N``) on
+    ``table`` (default: the record's, else a 0.9 x 0.6 m top).
 
-    ``llm`` is a backend name (``"embedded"``, ``"openai"``, ``"replay"``), an
-    :class:`LLM`, or a :class:`CallLog`. ``seed`` fixes every LLM call's seed and
-    the sampler, so the same inputs give the same result. ``record`` appends each
-    LLM call to a JSONL file that ``llm="replay"`` can read back. ``guess=False`` refuses
-    a request whose reading needs the LLM to choose objects it does not name. ``cache``
-    is the directory of an LLM answer cache (:func:`make_llm`): a seeded call asked
-    before is answered from it (a :class:`CallLog` given as ``llm`` keeps its own).
+    ``settings`` is the run's :class:`~llm_grop.settings.RunSettings` (default: its
+    defaults); ``overrides`` change its fields by name (``seed=3``, ``m=10``,
+    ``llm="openai"``), or give a component record whole (``options=ArrangeOptions(...)``,
+    ``llm_options=BackendOptions(...)``). ``llm`` is an :class:`LLM` or a
+    :class:`CallLog` to use instead of the record's backend (a name is the ``llm``
+    setting). ``seed`` fixes every LLM call's seed and the sampler, so the same inputs
+    give the same result. ``record`` appends each LLM call to a JSONL file that
+    ``llm="replay"`` can read back. ``guess=False`` refuses a request whose reading needs
+    the LLM to choose objects it does not name. The ``cache`` setting is the directory of
+    an LLM answer cache: a seeded call asked before is answered from it (a
+    :class:`CallLog` given as ``llm`` keeps its own).
     """
-    catalog = catalog or Catalog.load(catalog_files)
-    options = options or ArrangeOptions()
-    log = llm if isinstance(llm, CallLog) else make_llm(llm, llm_options, record, cache)
-    reading = understand(request, task=task, catalog=catalog, llm=log, seed=seed,
-                         params=options.params, on_event=on_event, guess=guess,
-                         table=table or Table())
-    items = seat_items(reading.items, table or Table())
-    top = seat_table(table or Table(), items)
-    return arrange_items(reading, items, log, catalog, top, seed, options, on_event)
+    if table is not None:
+        overrides["table"] = table
+    job = _Job.of(settings, llm, None, overrides | {"record": record})
+    s = job.settings
+    catalog = catalog or Catalog.load(s.catalog_files)
+    options = arrange_options(s, job.bases.arrange)
+    top = job.table or Table()
+    log = job.log()
+    reading = _understand(request, s, catalog, job.tasks, log, on_event, top)
+    items = seat_items(reading.items, top)
+    seated = seat_table(top, items)
+    return arrange_items(reading, items, log, catalog, seated, s.seed, options, on_event)
 
 
-def run(request: str | None = None, *, task: int | None = None, method: str = "llm-grop",
-        scene: Scene | str | PathLike[str] | None = None, chairs: int | None = None,
-        table: Table | None = None, seed: int = 0, llm: str | LLM | CallLog = "embedded",
-        llm_options: BackendOptions | None = None, catalog: Catalog | None = None,
-        catalog_files: Sequence[str | PathLike[str]] = (),
-        options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
-        simulator: str | Simulator = DEFAULT_SIMULATOR, planner: GropOptions | None = None,
-        feasibility: str = "default",
-        tasks: Mapping[int, Task] | None = None,
-        on_event: Callable[[str], None] | None = None, guess: bool = True,
-        execution: ExecutionPolicy | None = None,
-        cache: str | PathLike[str] | None = None) -> RunResult:
+def run(request: str | None = None, settings: RunSettings | None = None, *,
+        llm: LLM | CallLog | None = None, simulator: Simulator | None = None,
+        scene: Scene | None = None, catalog: Catalog | None = None,
+        on_event: Callable[[str], None] | None = None, **overrides: Any) -> RunResult:
     """Arrange, plan and execute: the paper's whole pipeline in a simulated dining room.
 
-    ``scene`` is a :class:`Scene`, a scene YAML file, or ``None`` for the packaged dining
-    room. ``chairs`` chairs are sampled near the target table for this seed (``None``
-    keeps the scene file's own chairs, or samples one if it lists none; ``chairs: []``
-    in the file means no chairs); the robot senses
-    them at planning time. ``table`` replaces the target table's top (same centre, yaw
-    and height), e.g. ``Table.circle(1.2)`` for a round one; ``None`` keeps the scene's.
-    ``method`` is one of :func:`available_methods` and ``simulator`` one of
-    :func:`available_simulators` or a simulator object, such as a
-    :class:`~llm_grop.simulation.mujoco.simulator.MujocoSimulator` with options (the plan
-    is the same whichever executes it); ``feasibility`` names the planner's belief of how
-    often actions succeed (``default``, or ``mujoco`` as fitted in 3D); ``tasks``
-    replaces the paper's Table I for ``task``; ``guess=False`` refuses a request whose
-    reading needs the LLM to choose objects; ``execution`` sets the executive's attempt
-    counts and place tolerances (default: the authors' counts, 20 manipulation attempts
-    for LLM-GROP and 10 for the baselines); ``cache`` is an LLM answer cache's directory
-    (:func:`make_llm`). The same seed gives the same run: it is :func:`plan` followed by
-    :func:`execute`.
+    The run is :func:`plan` followed by :func:`execute`, with the same ``settings`` (a
+    :class:`~llm_grop.settings.RunSettings`, default its defaults) and ``overrides`` (its
+    fields by name, e.g. ``task=8``, ``method="grop"``, ``chairs=4``, ``seed=3``,
+    ``simulator="mujoco"``, ``nav_attempts=5``; see :func:`plan`). ``simulator`` is a
+    simulator object to execute on instead of the record's (such as a
+    :class:`~llm_grop.simulation.mujoco.simulator.MujocoSimulator` recording a video; the
+    plan is the same whichever executes it). The same settings give the same run.
     """
-    from llm_grop.simulation.registry import create_simulator
-
-    sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
-    planned = plan(request, task=task, method=method, scene=scene, chairs=chairs, table=table,
-                   seed=seed, llm=llm, llm_options=llm_options, catalog=catalog,
-                   catalog_files=catalog_files, options=options, record=record,
-                   planner=planner, feasibility=feasibility, tasks=tasks, on_event=on_event,
-                   guess=guess, check=getattr(sim, "check", None), cache=cache)
+    simulator, overrides = _named_simulator(simulator, overrides)
+    execution = overrides.pop("execution", None)
+    job = _Job.of(settings, llm, scene, overrides)
+    sim = simulator if simulator is not None else make_simulator(job.settings)
+    planned = _plan(request, job, catalog, on_event, sim.check)
     return execute(planned, simulator=sim, execution=execution)
 
 
-def plan(request: str | None = None, *, task: int | None = None,
-         arrangement: Arrangement | None = None, method: str = "llm-grop",
-         scene: Scene | str | PathLike[str] | None = None, chairs: int | None = None,
-         table: Table | None = None, seed: int = 0, llm: str | LLM | CallLog = "embedded",
-         llm_options: BackendOptions | None = None, catalog: Catalog | None = None,
-         catalog_files: Sequence[str | PathLike[str]] = (),
-         options: ArrangeOptions | None = None, record: str | PathLike[str] | None = None,
-         planner: GropOptions | None = None, feasibility: str = "default",
-         tasks: Mapping[int, Task] | None = None,
-         on_event: Callable[[str], None] | None = None, guess: bool = True,
+def plan(request: str | None = None, settings: RunSettings | None = None, *,
+         arrangement: Arrangement | None = None, llm: LLM | CallLog | None = None,
+         scene: Scene | None = None, catalog: Catalog | None = None,
+         on_event: Callable[[str], None] | None = None,
          check: Callable[[Scene, Sequence[Item]], None] | None = None,
-         cache: str | PathLike[str] | None = None) -> PlanResult:
+         **overrides: Any) -> PlanResult:
     """Arrange and plan, without executing: what :func:`run` does before the simulator
-    starts, for a robot stack to execute (the arguments are :func:`run`'s).
+    starts, for a robot stack to execute.
+
+    ``settings`` is the run's :class:`~llm_grop.settings.RunSettings` and ``overrides``
+    change its fields by name: ``task`` (the paper's Table I task instead of a request),
+    ``method`` (one of :func:`available_methods`), ``scene`` (a scene YAML file; or a
+    :class:`Scene` given as ``scene``), ``chairs`` (sampled near the target table for
+    this seed; ``None`` keeps the scene file's own, or samples one if it lists none),
+    ``table`` (replaces the target table's top: ``"1.2x0.8"``, ``"round:1.2"`` or a
+    :class:`Table`), ``seed``, ``feasibility`` (the planner's belief: ``default``, or
+    ``mujoco`` as fitted in 3D), ``weight`` and ``fidelity_weight``, the LLM's fields
+    (``llm``, ``model``, ``temperature``, ...), ``guess``, ``cache``. Component records
+    may be given whole: ``options`` (:class:`ArrangeOptions`), ``planner``
+    (:class:`~llm_grop.planning.utility.GropOptions`), ``llm_options``
+    (:class:`BackendOptions`); ``tasks`` replaces the paper's Table I and ``record``
+    appends each LLM call to a JSONL file.
 
     With ``arrangement`` (an :class:`Arrangement`, e.g. read with
     :func:`~llm_grop.world.serialize.arrangement_from_dict`) instead of a request, its
@@ -201,45 +222,100 @@ def plan(request: str | None = None, *, task: int | None = None,
     then only chooses how standing positions are picked. ``check(scene, items)`` may refuse
     the episode before any work (a simulator's own check). :func:`execute` runs the plan.
     """
+    overrides.pop("execution", None)  # the executive's: execute() takes it
+    job = _Job.of(settings, llm, scene, overrides)
+    return _plan(request, job, catalog, on_event, check, arrangement)
+
+
+@dataclass(frozen=True)
+class _Job:
+    """A run's settings record and what the caller gave besides: component records whole,
+    an LLM object, a scene object, a table with seats, other tasks, a record file."""
+
+    settings: RunSettings
+    bases: Bases
+    llm: LLM | CallLog | None = None
+    scene: Scene | None = None
+    table: Table | None = None
+    tasks: Mapping[int, Task] | None = None
+    record: str | PathLike[str] | None = None
+
+    @classmethod
+    def of(cls, settings: RunSettings | None, llm: Any, scene: Any,
+           overrides: dict[str, Any]) -> _Job:
+        """The job ``settings`` with ``overrides`` describe (objects apart)."""
+        llm, overrides = _named_llm(llm, overrides)
+        scene, overrides = _named_scene(scene, overrides)
+        tasks = overrides.pop("tasks", None)
+        record = overrides.pop("record", None)
+        table = overrides.get("table")
+        if isinstance(table, Table):
+            overrides["table"] = table.text
+        else:
+            table = None
+        s, bases = settle(settings, overrides)
+        if table is None and s.table is not None:
+            table = Table.parse(s.table)
+        return cls(s, bases, llm, scene, table, tasks, record)
+
+    def log(self) -> CallLog:
+        """A fresh call log over the job's LLM (built now when it is a backend's name)."""
+        if isinstance(self.llm, CallLog):
+            return self.llm
+        check_backend(self.settings)
+        backend = self.llm if self.llm is not None else make_backend(self.settings,
+                                                                     self.bases.backend)
+        return call_log(backend, record=self.record, cache=self.settings.cache)
+
+
+def _plan(request: str | None, job: _Job, catalog: Catalog | None,
+          on_event: Callable[[str], None] | None,
+          check: Callable[[Scene, Sequence[Item]], None] | None,
+          arrangement: Arrangement | None = None) -> PlanResult:
+    """:func:`plan` of ``job``."""
     from llm_grop.methods.base import EpisodeInput, GivenArrangement
     from llm_grop.methods.episode import plan_episode
     from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.scenario import prepare_episode
     from llm_grop.world.scene_file import load_scene, set_target_top
 
-    catalog = catalog or Catalog.load(catalog_files)
-    options = options or ArrangeOptions()
-    chosen = get_method(method)
-    feasibility_profile(feasibility)  # an unknown profile is reported before any work
-    base = scene if isinstance(scene, Scene) else load_scene(scene)
+    s = job.settings
+    catalog = catalog or Catalog.load(s.catalog_files)
+    tasks = job.tasks if job.tasks is not None or not s.task_files \
+        else load_tasks(s.task_files)
+    options = arrange_options(s, job.bases.arrange)
+    chosen = get_method(s.method)
+    feasibility_profile(s.feasibility)  # an unknown profile is reported before any work
+    planner = planner_options(s, job.bases.planner)
+    base = job.scene if job.scene is not None else load_scene(s.scene)
+    table, chairs = job.table, s.chairs
     if arrangement is not None:
-        if request is not None or task is not None:
-            raise BadInput("arrangement: give a request, a task or an arrangement, not both")
+        if request is not None or s.task is not None:
+            raise BadInput("give a request, a task or an arrangement, not both",
+                           param="arrangement")
         table = arrangement.table
     if table is not None:
         base = set_target_top(base, table, keep_chairs=chairs is None)
     for k, source in enumerate(base.sources):
         kind = _NUMBERED.sub("", source.object)
         if catalog.lookup(kind) is None:
-            where = f"{scene}: " if scene is not None and not isinstance(scene, Scene) else ""
+            where = f"{s.scene}: " if s.scene is not None and job.scene is None else ""
             raise BadInput(f"{where}sources[{k}] ({source.object!r}).object: unknown object; "
                            f"did you mean {', '.join(map(repr, catalog.suggest(kind))) or '?'}")
     if chairs is None and not (base.chairs or base.chairs_listed):
         chairs = 1
-    made: list[CallLog] = [llm] if isinstance(llm, CallLog) else []
+    made: list[CallLog] = []
 
     def log() -> CallLog:
         if not made:
-            made.append(make_llm(llm, llm_options, record, cache))  # type: ignore[arg-type]
+            made.append(job.log())
         return made[0]
 
     if arrangement is not None:
         reading = Request(arrangement.request, _given_items(arrangement, catalog))
-        chosen = GivenArrangement(chosen, arrangement)
+        chosen = GivenArrangement(chosen, arrangement)  # type: ignore[assignment]
     else:
-        reading = understand(request, task=task, catalog=catalog, tasks=tasks, llm=log,
-                             seed=seed, params=options.params, on_event=on_event,
-                             guess=guess, table=base.target_top)
+        reading = _understand(request, s, catalog, tasks, log, on_event, base.target_top)
     items = seat_items(reading.items, base.target_top)  # a scene with seats: one setting each
     top = seat_table(base.target_top, items)  # too many diners: reported before any work
     if top.diners and not base.diners:
@@ -248,25 +324,65 @@ def plan(request: str | None = None, *, task: int | None = None,
         base = replace(base, diners=top.diners)
     if check is not None:
         check(base, items)
-    episode = prepare_episode(base, items, seed, chairs=chairs)
-    inp = EpisodeInput(reading.text, items, top, seed, catalog,
-                       log() if chosen.uses_llm else None, options, on_event, reading)
-    planned = plan_episode(chosen, inp, episode, model=feasibility, planner=planner)
-    return PlanResult(chosen.name, task, inp, planned, planner,
-                      getattr(chosen, "manip_attempts", BASELINE_MANIP_ATTEMPTS))
+    episode = prepare_episode(base, items, s.seed, chairs=chairs)
+    inp = EpisodeInput(reading.text, items, top, s.seed, catalog,
+                       log() if chosen.arrangement.uses_llm else None, options, on_event,
+                       reading)
+    planned = plan_episode(chosen, inp, episode, model=s.feasibility, planner=planner)
+    return PlanResult(chosen.name, s.task, inp, planned, planner, chosen.manip_attempts, s)
 
 
-def execute(planned: PlanResult, *, simulator: str | Simulator = DEFAULT_SIMULATOR,
-            execution: ExecutionPolicy | None = None) -> RunResult:
-    """Execute a plan from :func:`plan` on ``simulator`` (a name or a simulator object): the
-    same run as :func:`run` with the same arguments and seed."""
+def execute(planned: PlanResult, settings: RunSettings | None = None, *,
+            simulator: Simulator | None = None, **overrides: Any) -> RunResult:
+    """Execute a plan from :func:`plan` on the simulator its settings name (or on the
+    simulator object ``simulator``): the same run as :func:`run` with the same settings.
+
+    ``settings`` defaults to the plan's own; ``overrides`` change its fields by name
+    (``simulator="mujoco"``, ``nav_attempts=5``), or give the executive's policy whole
+    (``execution=ExecutionPolicy(...)``, for its place tolerances).
+    """
     from llm_grop.methods.episode import execute_episode
-    from llm_grop.simulation.registry import create_simulator
 
-    sim = create_simulator(simulator) if isinstance(simulator, str) else simulator
+    simulator, overrides = _named_simulator(simulator, overrides)
+    s, bases = settle(settings or planned.settings, overrides)
+    sim = simulator if simulator is not None else make_simulator(s)
     return execute_episode(planned.planned, planned.input, task=planned.task, simulator=sim,
                            method=planned.method, attempts=planned.manip_attempts,
-                           planner=planned.planner, policy=execution)
+                           planner=planned.planner,
+                           policy=execution_policy(s, bases.execution))
+
+
+def _named_llm(llm: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``llm`` as an object (``None``: the record's backend); a name given as ``llm`` is
+    the ``llm`` setting."""
+    overrides = dict(overrides)
+    given = overrides.pop("llm", None) if llm is None else None
+    if isinstance(llm, str):
+        overrides["llm"], llm = llm, None
+    elif given is not None and not isinstance(given, str):
+        llm = given
+    elif given is not None:
+        overrides["llm"] = given
+    return llm, overrides
+
+
+def _named_simulator(simulator: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``simulator`` as an object (``None``: the record's); a name is the setting."""
+    overrides = dict(overrides)
+    if isinstance(simulator, str):
+        overrides["simulator"], simulator = simulator, None
+    return simulator, overrides
+
+
+def _named_scene(scene: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``scene`` as a :class:`Scene` (``None``: the record's file); a path is the
+    setting."""
+    overrides = dict(overrides)
+    given = overrides.pop("scene", None)
+    scene = scene if scene is not None else given
+    if scene is not None and not isinstance(scene, Scene):
+        overrides["scene"], scene = str(scene), None
+    return scene, overrides
 
 
 #: A trailing instance number: "dinner fork 2" is of kind "dinner fork".

@@ -61,7 +61,8 @@ class Registry(Generic[T]):
         builtins: what llm-grop ships: name -> ``"module:attribute"``, loaded on first use.
         factory: for kinds whose entries are factories, their signature (``() -> Simulator``);
             an entry that is not callable is refused.
-        product: attributes an object a factory makes must have (``("name", "execute")``).
+        protocol: the runtime-checkable protocol an object a factory makes must follow, and
+            ``product`` the members it needs, named when one does not.
         check: raises :class:`BadInput` when a loaded object is not a valid entry; it gets
             the entry's name, the object and where it came from.
     """
@@ -73,6 +74,7 @@ class Registry(Generic[T]):
     builtins: Mapping[str, str]
     factory: str | None = None
     product: tuple[str, ...] = ()
+    protocol: type | None = None
     check: Callable[[str, Any, str], None] | None = None
     _runtime: dict[str, Any] = field(default_factory=dict)
     _loaded: dict[str, Any] = field(default_factory=dict)
@@ -178,8 +180,9 @@ class Registry(Generic[T]):
     def create(self, name: str, *args: Any) -> Any:
         """What the factory registered as ``name`` makes of ``args``.
 
-        A plugin's factory that fails, or makes an object without :attr:`product`'s
-        attributes, is :class:`BadInput` naming the plugin (llm-grop's own errors pass).
+        A plugin's factory that fails, or makes an object that does not follow
+        :attr:`protocol`, is :class:`BadInput` naming the plugin (llm-grop's own errors
+        pass).
         """
         key = self.key(name)
         origin = self.origin(key)
@@ -192,10 +195,10 @@ class Registry(Generic[T]):
                 raise
             raise BadInput(f"{origin}: {self.kind} {key!r} failed to start: "
                            f"{type(exc).__name__}: {exc}", param=self.param) from None
-        missing = [a for a in self.product if not hasattr(made, a)]
-        if missing:
-            raise BadInput(f"{origin}: {self.kind} {key!r} made an object without "
-                           f"{', '.join(missing)}", param=self.param)
+        if self.protocol is not None and not isinstance(made, self.protocol):
+            raise BadInput(f"{origin}: {self.kind} {key!r} made an object that is not "
+                           f"a {self.protocol.__name__} (it needs {', '.join(self.product)})",
+                           param=self.param)
         return made
 
     def _validate(self, name: str, obj: Any, origin: str) -> None:

@@ -52,7 +52,7 @@ def test_every_combination_is_a_bench_directory(swept: tuple[Path, Path]) -> Non
     assert [c.name for c in load_sweep(path).cells] == names
     for name in names:
         identity = json.loads((out / name / "experiment.json").read_text())
-        assert identity["w"] == float(name.split(",")[0].split("=")[1])
+        assert identity["weight"] == float(name.split(",")[0].split("=")[1])
         assert identity["chairs"] == int(name[-1])
         rows = _rows(out / name)
         assert len(rows) == 4 and {r["method"] for r in rows} == {"grop", "llm-grop"}
@@ -97,7 +97,7 @@ def test_a_cell_holding_another_experiment_is_refused(swept: tuple[Path, Path],
     other.write_text(SWEEP.replace("images: false", "images: false\nfidelity_weight: 2"))
     assert main(["sweep", str(other), "--out", str(out)]) == 2
     assert ("weight=20,chairs=0: holds another experiment's results (different "
-            "fidelity_weight_s_per_cm)") in _one_line_error(capsys)
+            "fidelity_weight)") in _one_line_error(capsys)
 
 
 def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> None:

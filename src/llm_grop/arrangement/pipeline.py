@@ -31,6 +31,7 @@ from llm_grop.arrangement.setting import Attempt, Sampled, Setting
 from llm_grop.errors import BadInput, Infeasible, LLMError, ReplayMissing
 from llm_grop.language.answer_reader import parse_relations
 from llm_grop.llm.base import CallLog, SamplingParams
+from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.fidelity import Fidelity
@@ -60,8 +61,8 @@ class ArrangeOptions:
     decided by the LLM's relations or clingo (:func:`~llm_grop.arrangement.consistency.choose`).
     """
 
-    m: int = 25
-    max_attempts: int = 3
+    m: int = DEFAULTS.m
+    max_attempts: int = DEFAULTS.attempts
     examples: str | None = None
     notes: str = ""
     params: SamplingParams = field(default_factory=SamplingParams)

@@ -112,7 +112,7 @@ class Preferences:
 
 
 #: The API parameter that holds the preferences a user states for one request.
-PREFER = "options.preferences"
+PREFER = "preferences"
 
 
 def _refused(param: str | None, sentence: str, why: str) -> BadInput:

@@ -22,6 +22,7 @@ import numpy as np
 from llm_grop.arrangement.predicates import Footprint, clear_of, inside_table
 from llm_grop.errors import BadInput, Infeasible
 from llm_grop.geometry.places import Place, places
+from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import Configuration, Item, Placement
 from llm_grop.world.table import Table
 
@@ -44,7 +45,7 @@ MAX_TRIES = 50
 
 
 def random_configurations(items: Sequence[Item], table: Table, rng: np.random.Generator,
-                          m: int = 25) -> tuple[Configuration, ...]:
+                          m: int = DEFAULTS.m) -> tuple[Configuration, ...]:
     """``m`` configurations with every item drawn at random around its diner's place
     centre, on the table and without overlaps (see the module doc). An item's ``diner``
     is its seat's index in ``table.seats`` (``None``: the first). Raises

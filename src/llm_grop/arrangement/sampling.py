@@ -65,6 +65,7 @@ from llm_grop.arrangement.sampler_checks import (
 )
 from llm_grop.errors import BadInput, Infeasible
 from llm_grop.geometry.places import inside_region
+from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import Configuration, Item, Placement
 from llm_grop.world.relation import Relation
 from llm_grop.world.table import Table
@@ -291,7 +292,7 @@ def _precheck(items: Sequence[Item], layout: GuidedLayout, table: Table) -> None
 
 def sample_configurations(items: Sequence[Item], layout: GuidedLayout,
                           relations: Sequence[Relation], table: Table,
-                          rng: np.random.Generator, m: int = 25, batch: int = 256,
+                          rng: np.random.Generator, m: int = DEFAULTS.m, batch: int = 256,
                           max_rounds: int = DEFAULT_MAX_ROUNDS,
                           gaps_m: Mapping[Key, float] | None = None,
                           tolerance_m: float | None = GAP_TOLERANCE_M,

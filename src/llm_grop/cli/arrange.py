@@ -7,41 +7,35 @@ from typing import Any
 
 import click
 
-from llm_grop.cli.execution import cache_flags, cache_setting
+from llm_grop.cli.execution import NO_CACHE, cache_setting
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import (
     EPILOG,
-    NO_GUESS,
-    TABLE,
+    QUIET,
+    RECORD,
     StagedOutputs,
     check_outputs,
     check_request,
-    llm_flags,
-    llm_settings,
 )
-from llm_grop.world.table import Table
+from llm_grop.cli.settings import ARRANGE_FIELDS, LLM_FIELDS, checked_settings, flags
 
 
 @click.command(epilog=EPILOG)
 @VERBOSE
 @click.argument("request", required=False)
-@click.option("--task", type=click.IntRange(1),
-              help="Use the objects of the paper's Table I task N.")
-@TABLE
-@click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
-              help="Seed for every LLM call and the sampler.")
+@flags("task", "table", "seed", help={"seed": "Seed for every LLM call and the sampler."})
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write the arrangement JSON here.")
 @click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write a top-down PNG of the table here.")
-@llm_flags
-@cache_flags
-@NO_GUESS
-@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
-def arrange(request: str | None, task: int | None, table: Table | None, seed: int,
-            json_path: Path | None, image_path: Path | None, record_path: Path | None,
-            catalog_files: tuple[Path, ...], quiet: bool, no_guess: bool,
-            cache_dir: Path | None, no_cache: bool, **flags: Any) -> None:
+@flags(*LLM_FIELDS)
+@RECORD
+@flags(*ARRANGE_FIELDS, "cache")
+@NO_CACHE
+@flags("guess")
+@QUIET
+def arrange(request: str | None, json_path: Path | None, image_path: Path | None,
+            record_path: Path | None, quiet: bool, no_cache: bool, **params: Any) -> None:
     """Arrange the objects of REQUEST on the table (paper §III-A, §III-B).
 
     REQUEST is in your own words ("a plate with a fork on its left", "breakfast for
@@ -53,11 +47,10 @@ def arrange(request: str | None, task: int | None, table: Table | None, seed: in
     from llm_grop.world.jsonio import write_json
     from llm_grop.world.serialize import arrangement_to_dict
 
-    check_request("arrange", request, task)
-    llm_options, options = llm_settings(**flags)
+    check_request("arrange", request, params["task"])
+    settings = checked_settings(params, cache=cache_setting(params["cache"], no_cache))
     # Every output is checked before the LLM is paid for.
     check_outputs(json=json_path, image=image_path, record=record_path)
-    cache = cache_setting(cache_dir, no_cache)
     out = Console()
     err = Console(stderr=True)
     with err.status("starting", spinner="dots") as status:
@@ -65,10 +58,7 @@ def arrange(request: str | None, task: int | None, table: Table | None, seed: in
             if not quiet:
                 status.update(message)
 
-        result = api_arrange(request, task=task, llm=flags["backend"], llm_options=llm_options,
-                             table=table if table is not None else Table(), seed=seed,
-                             catalog_files=catalog_files, options=options, record=record_path,
-                             on_event=on_event, guess=not no_guess, cache=cache)
+        result = api_arrange(request, settings, record=record_path, on_event=on_event)
     with StagedOutputs() as outputs:
         outputs.write("json", json_path,
                       lambda p: write_json(p, arrangement_to_dict(result.arrangement)))

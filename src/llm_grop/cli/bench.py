@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, overload
 
@@ -12,27 +11,22 @@ import click
 
 from llm_grop.cli.execution import execution_flags, execution_settings
 from llm_grop.cli.logs import VERBOSE
-from llm_grop.cli.options import (
-    EPILOG,
-    FEASIBILITY,
-    FIDELITY_WEIGHT,
-    GRASP,
-    SIMULATOR,
-    TABLE,
-    TRUTH,
-    WEIGHT,
-    attempt_flags,
-    check_out_dir,
-    llm_flags_without_record,
-    llm_settings,
+from llm_grop.cli.options import EPILOG, check_out_dir
+from llm_grop.cli.settings import (
+    ARRANGE_FIELDS,
+    ATTEMPT_FIELDS,
+    LLM_FIELDS,
+    ROOM_FIELDS,
+    checked_settings,
+    flags,
 )
 from llm_grop.errors import BadInput
-from llm_grop.world.table import Table
 
 if TYPE_CHECKING:
     from rich.console import Console
 
     from llm_grop.experiment.runner import Experiment
+    from llm_grop.settings import RunSettings
 
 
 def parse_tasks(text: str, known: dict[int, Any]) -> tuple[int, ...]:
@@ -46,22 +40,24 @@ def parse_tasks(text: str, known: dict[int, Any]) -> tuple[int, ...]:
             try:
                 span = range(int(lo), int(hi or lo) + 1)
             except ValueError:
-                raise BadInput(f"--tasks: {part!r} is not a task number or range") from None
+                raise BadInput(f"{part!r} is not a task number or range",
+                               param="tasks") from None
             if not span:
-                raise BadInput(f"--tasks: {part!r} is an empty range")
+                raise BadInput(f"{part!r} is an empty range", param="tasks")
             ids += span
         else:
             tagged = [t for t, task in known.items() if part in task.tags]
             if not tagged:
                 tags = sorted({g for task in known.values() for g in task.tags})
-                raise BadInput(f"--tasks: no task is tagged {part!r} (tags: {', '.join(tags)})")
+                raise BadInput(f"no task is tagged {part!r} (tags: {', '.join(tags)})",
+                               param="tasks")
             ids += tagged
     unknown = [t for t in ids if t not in known]
     if unknown:
-        raise BadInput(f"--tasks: unknown task {unknown[0]} "
-                       f"(tasks: {', '.join(map(str, known))})")
+        raise BadInput(f"unknown task {unknown[0]} (tasks: {', '.join(map(str, known))})",
+                       param="tasks")
     if not ids:
-        raise BadInput("--tasks: no task given")
+        raise BadInput("no task given", param="tasks")
     return tuple(dict.fromkeys(ids))
 
 
@@ -80,23 +76,23 @@ def parse_methods(text: str) -> tuple[str, ...]:
     return names
 
 
-def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], options: Any,
-                 catalog_files: tuple[Path, ...], simulator: Any, scene: Any) -> None:
+def _check_tasks(tasks: tuple[int, ...], known: dict[int, Any], settings: RunSettings,
+                 simulator: Any, scene: Any) -> None:
     """Unknown objects, bad preferences and objects the simulator cannot handle are
     reported before any trial runs (and writes its directory)."""
     from llm_grop.arrangement.preferences import read_preferences
+    from llm_grop.assembly import arrange_options
     from llm_grop.world.catalog import Catalog
     from llm_grop.world.request import items_from_names
 
-    catalog = Catalog.load(catalog_files)
+    catalog = Catalog.load(settings.catalog_files)
+    options = arrange_options(settings)
     for t in tasks:
         items = items_from_names(known[t].objects, catalog, where=f"task {t}: objects")
-        check = getattr(simulator, "check", None)
-        if check is not None:
-            try:
-                check(scene, items)
-            except BadInput as exc:
-                raise _for_task(t, exc) from None
+        try:
+            simulator.check(scene, items)
+        except BadInput as exc:
+            raise _for_task(t, exc) from None
         if options.preferences or options.preference_pool:
             try:
                 read_preferences(options.preferences, options.preference_pool, items, catalog)
@@ -111,37 +107,29 @@ def _for_task(task: int, exc: BadInput) -> BadInput:
     return BadInput(f"task {task}: {exc.detail}", param=exc.param, value=exc.value)
 
 
+#: The experiment's own parameters when no flag (or sweep key) sets them.
+BENCH_DEFAULTS: dict[str, Any] = {"tasks_text": "paper", "trials": 20,
+                                  "methods_text": "tpra,latp,grop,llm-grop",
+                                  "no_images": False}
+
+
 @click.command(epilog=EPILOG)
 @VERBOSE
-@click.option("--tasks", "tasks_text", default="paper", show_default=True,
-              help="Task ids, ranges or tags: 1-8, 1,3,5, paper, smoke.")
-@click.option("--trials", default=20, show_default=True, type=click.IntRange(1),
-              help="Trials per task and method.")
-@click.option("--methods", "methods_text", default="tpra,latp,grop,llm-grop",
+@click.option("--tasks", "tasks_text", default=BENCH_DEFAULTS["tasks_text"],
+              show_default=True, help="Task ids, ranges or tags: 1-8, 1,3,5, paper, smoke.")
+@click.option("--trials", default=BENCH_DEFAULTS["trials"], show_default=True,
+              type=click.IntRange(1), help="Trials per task and method.")
+@click.option("--methods", "methods_text", default=BENCH_DEFAULTS["methods_text"],
               show_default=True, help="Comma-separated methods.")
 @click.option("--out", "out_dir", default=Path("bench"), show_default=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="Results directory; rerunning into it resumes.")
-@click.option("--seed", default=0, show_default=True, type=click.IntRange(0),
-              help="Seed of trial 0 (trial k: seed+k).")
-@click.option("--scene", "scene_path", type=click.Path(dir_okay=False, path_type=Path),
-              help="Dining-room scene YAML (default: the packaged dining room).")
-@click.option("--chairs", type=click.IntRange(0),
-              help="Chairs sampled near the table in every trial [default: the scene's own, "
-                   "else 1].")
-@TABLE
-@SIMULATOR
-@GRASP
-@TRUTH
-@FEASIBILITY
-@WEIGHT
-@FIDELITY_WEIGHT
-@click.option("--task-file", "task_files", multiple=True,
-              type=click.Path(dir_okay=False, path_type=Path),
-              help="Extra tasks (YAML, like the packaged tasks.yaml); repeatable.")
+@flags("seed", "scene", "chairs", *ROOM_FIELDS, "task_files", help={
+    "seed": "Seed of trial 0 (trial k: seed+k).",
+    "chairs": "Chairs sampled near the table in every trial [default: the scene's own, "
+              "else 1]."})
 @click.option("--no-images", is_flag=True, help="Do not draw each trial's final table.")
-@attempt_flags
-@llm_flags_without_record
+@flags(*ATTEMPT_FIELDS, *LLM_FIELDS, *ARRANGE_FIELDS, "guess")
 @execution_flags
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 def bench(quiet: bool, **params: Any) -> None:
@@ -154,7 +142,9 @@ def bench(quiet: bool, **params: Any) -> None:
 
     out_dir: Path = params["out_dir"]
     executor, threads, cache = execution_settings(**params)
-    exp = prepare_experiment(threads=threads, cache=cache, **params)
+    exp = prepare_experiment(checked_settings(params, cache=cache), tasks_text=params[
+        "tasks_text"], trials=params["trials"], methods_text=params["methods_text"],
+        out_dir=out_dir, no_images=params["no_images"], threads=threads)
     console = Console(stderr=True)
     t0 = time.perf_counter()
     with TrialProgress(console, quiet, out_dir) as progress:
@@ -174,73 +164,57 @@ def bench(quiet: bool, **params: Any) -> None:
                   f"{wall:.1f} s on {describe(executor)}; results in {out_dir}")
 
 
-def prepare_experiment(*, tasks_text: str, trials: int, methods_text: str, out_dir: Path,
-                       seed: int, scene_path: Path | None, chairs: int | None,
-                       table: Table | None, simulator: str, feasibility: str, w: float,
-                       fidelity_w: float, task_files: tuple[Path, ...], no_images: bool,
-                       catalog_files: tuple[Path, ...], threads: int | None,
-                       cache: str | None, nav_attempts: int = 3,
-                       manip_attempts: int | None = None, grasp: str = "fix",
-                       truth: str | None = None, **flags: Any) -> Experiment:
-    """The experiment ``bench``'s flags describe, every input checked (unknown components,
-    tasks, objects and preferences, the output directory) before any trial runs.
-
-    ``threads`` are the embedded model's per worker, ``cache`` the LLM cache's directory
-    (``None``: none); ``flags`` holds the LLM flags (others are ignored).
+def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
+                       methods_text: str, out_dir: Path, no_images: bool,
+                       threads: int | None) -> Experiment:
+    """The experiment of ``settings`` (trial 0's seed, the room, the planner, the LLM...)
+    over the tasks ``tasks_text``, ``trials`` trials each, of the methods ``methods_text``,
+    into ``out_dir``; every input checked (unknown components, tasks, objects and
+    preferences, the output directory) before any trial runs. ``threads`` are the embedded
+    model's per worker.
     """
+    from llm_grop.assembly import make_backend, make_simulator
     from llm_grop.experiment.runner import Experiment
     from llm_grop.experiment.trial import TrialSettings
-    from llm_grop.llm.registry import BACKENDS, create_llm
+    from llm_grop.llm.registry import BACKENDS
     from llm_grop.methods.registry import get_method
     from llm_grop.planning.feasibility import feasibility_profile
-    from llm_grop.planning.utility import GropOptions
-    from llm_grop.simulation.registry import create_simulator
     from llm_grop.world.scene_file import load_scene, set_target_top
+    from llm_grop.world.table import Table
     from llm_grop.world.tasks import load_tasks
 
     # Absolute, so that workers on other machines find the same files.
-    scene_path, task_files, catalog_files = (
-        _absolute(scene_path), tuple(map(_absolute, task_files)),
-        tuple(map(_absolute, catalog_files)))
-    flags = flags | {"replay_path": _absolute(flags.get("replay_path"))}
-    if flags.get("model") and Path(flags["model"]).expanduser().is_file():
-        flags["model"] = str(_absolute(flags["model"]))  # a GGUF file
+    absolute = {name: _absolute(getattr(settings, name)) for name in
+                ("scene", "replay", "preferences_file") if getattr(settings, name)}
+    absolute |= {name: tuple(str(_absolute(p)) for p in getattr(settings, name))
+                 for name in ("task_files", "catalog_files")}
+    if settings.model and Path(settings.model).expanduser().is_file():
+        absolute["model"] = _absolute(settings.model)  # a GGUF file
+    settings = settings.with_values(**absolute)
     check_out_dir("out", out_dir)  # before any model is loaded or trial run
     if not no_images and (out_dir / "images").exists() and not (out_dir / "images").is_dir():
-        raise BadInput(f"--out {out_dir}: {out_dir / 'images'} is a file, where each "
-                       f"trial's picture goes; remove it or pass --no-images")
-    known = load_tasks(task_files)
+        raise BadInput(f"{out_dir / 'images'} is a file, where each trial's picture goes; "
+                       "remove it or pass --no-images", param="out", value=out_dir)
+    known = load_tasks(settings.task_files)
     tasks = parse_tasks(tasks_text, known)
     methods = parse_methods(methods_text)
-    llm_options, options = llm_settings(**flags)
     # Unknown or broken components are reported before any trial runs, and their names
     # are written canonically into the experiment's identity.
-    sim = create_simulator(simulator, grasp=grasp, truth=truth)
-    feasibility_profile(feasibility)
-    GropOptions(w=w, fidelity_w_s_per_cm=fidelity_w)  # each trial makes its own
-    if not no_images and hasattr(sim, "check_rendering"):
+    sim = make_simulator(settings)
+    feasibility_profile(settings.feasibility)
+    if not no_images and sim.supports_pictures:
         sim.check_rendering()  # a simulator that renders says now if it cannot
-    backend = BACKENDS.key(flags["backend"])
-    if any(get_method(m).uses_llm for m in methods):
-        create_llm(backend, llm_options)
-    else:
-        BACKENDS.get(backend)
-    scene = load_scene(scene_path)  # a bad scene is reported before any trial runs
-    table_text = None
-    if table is not None:
-        scene = set_target_top(scene, table, keep_chairs=chairs is None)
-        table_text = table.text  # one spelling per table in the experiment's identity
-    _check_tasks(tasks, known, options, catalog_files, sim, scene)
-    settings = TrialSettings(
-        backend=backend, llm_options=replace(llm_options, n_threads=threads),
-        arrange=options, llm_cache=cache,
-        scene=str(scene_path) if scene_path else None, chairs=chairs, table=table_text, w=w,
-        fidelity_w_s_per_cm=fidelity_w,
-        task_files=tuple(map(str, task_files)), catalog_files=tuple(map(str, catalog_files)),
-        images=None if no_images else str(out_dir / "images"), simulator=sim.name,
-        feasibility=feasibility, nav_attempts=nav_attempts, manip_attempts=manip_attempts,
-        grasp=grasp, truth=truth)
-    return Experiment(tasks, trials, methods, settings, seed)
+    settings = settings.with_values(llm=BACKENDS.key(settings.llm), simulator=sim.name)
+    if any(get_method(m).arrangement.uses_llm for m in methods):
+        make_backend(settings)
+    scene = load_scene(settings.scene)  # a bad scene is reported before any trial runs
+    if settings.table is not None:
+        scene = set_target_top(scene, Table.parse(settings.table),
+                               keep_chairs=settings.chairs is None)
+    _check_tasks(tasks, known, settings, sim, scene)
+    return Experiment(tasks, trials, methods, TrialSettings(
+        settings, images=None if no_images else str(out_dir / "images"),
+        llm_threads=threads), settings.seed)
 
 
 @overload

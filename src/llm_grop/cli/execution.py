@@ -10,18 +10,15 @@ from typing import Any
 import click
 
 from llm_grop.cli.options import F, check_out_dir
+from llm_grop.cli.settings import option
 from llm_grop.errors import BadInput
 
 log = logging.getLogger(__name__)
 
 
-_CACHE_OPTIONS = [
-    click.option("--cache-dir", type=click.Path(file_okay=False, path_type=Path),
-                 help="The shared LLM answer cache [default: $LLM_GROP_CACHE_DIR, else "
-                      "~/.cache/llm-grop/llm-calls]."),
-    click.option("--no-cache", is_flag=True,
-                 help="Ask the LLM every call, without the shared answer cache."),
-]
+#: ``--no-cache``, beside the ``cache`` setting's ``--cache-dir``.
+NO_CACHE = click.option("--no-cache", is_flag=True,
+                        help="Ask the LLM every call, without the shared answer cache.")
 
 _EXECUTION_OPTIONS = [
     click.option("--executor", default="local", show_default=True,
@@ -40,7 +37,8 @@ _EXECUTION_OPTIONS = [
     click.option("--llm-threads", type=click.IntRange(1),
                  help="The embedded model's CPU threads in each worker [default: the cores "
                       "over --workers locally, 1 under Ray]."),
-    *_CACHE_OPTIONS,
+    option("cache"),
+    NO_CACHE,
     click.option("--max-failed", type=click.IntRange(1),
                  help="Stop once this many trials got no LLM answer after their retries "
                       "(the server is down) [default: never; such trials are recorded "
@@ -48,16 +46,9 @@ _EXECUTION_OPTIONS = [
 ]
 
 
-def cache_flags(f: F) -> F:
-    """Add the flags that choose the shared LLM answer cache (``run``, ``arrange``)."""
-    for option in reversed(_CACHE_OPTIONS):
-        f = option(f)
-    return f
-
-
-def cache_setting(cache_dir: Path | None, no_cache: bool, *, as_written: bool = False
+def cache_setting(cache_dir: str | Path | None, no_cache: bool, *, as_written: bool = False
                   ) -> str | None:
-    """The LLM cache's directory from the flags of :func:`cache_flags` (``None``: no
+    """The LLM cache's directory from the flags of ``--cache-dir`` and ``--no-cache`` (``None``: no
     cache). The default is left as written (``~``, ``$LLM_GROP_CACHE_DIR``) with
     ``as_written``, so that each node of a cluster finds its own home's cache; a default
     that cannot be written is a warning and no cache, a given one bad input."""
@@ -66,6 +57,7 @@ def cache_setting(cache_dir: Path | None, no_cache: bool, *, as_written: bool = 
     if no_cache:
         return None
     if cache_dir is not None:
+        cache_dir = Path(cache_dir)
         check_out_dir("cache_dir", cache_dir)
         return str(cache_dir.expanduser().absolute())
     try:
@@ -80,13 +72,13 @@ def cache_setting(cache_dir: Path | None, no_cache: bool, *, as_written: bool = 
 
 def execution_flags(f: F) -> F:
     """Add the flags that say where trials run and how LLM answers are cached."""
-    for option in reversed(_EXECUTION_OPTIONS):
-        f = option(f)
+    for one in reversed(_EXECUTION_OPTIONS):
+        f = one(f)
     return f
 
 
 def execution_settings(executor: str, workers: int | None, ray_address: str | None,
-                       cpus_per_trial: float, llm_threads: int | None, cache_dir: Path | None,
+                       cpus_per_trial: float, llm_threads: int | None, cache: Path | None,
                        no_cache: bool, **_: Any) -> tuple[Any, int, str | None]:
     """``(executor, embedded model threads, LLM cache directory or None)`` from the flags
     of :func:`execution_flags`; the executor is built (Ray is imported) only for ``ray``."""
@@ -103,4 +95,4 @@ def execution_settings(executor: str, workers: int | None, ray_address: str | No
     made = create_executor(name, ExecutorOptions(workers=workers, address=ray_address,
                                                  cpus_per_trial=cpus_per_trial))
     threads = llm_threads or default_threads(name, workers)
-    return made, threads, cache_setting(cache_dir, no_cache, as_written=True)
+    return made, threads, cache_setting(cache, no_cache, as_written=True)

@@ -1,4 +1,5 @@
-"""Flags shared by the commands that call an LLM, and what they build."""
+"""What the commands share besides the settings record's flags (:mod:`.settings`): the
+exit statuses, output paths checked before any work, and outputs written all or none."""
 
 from __future__ import annotations
 
@@ -13,10 +14,6 @@ from typing import Any, TypeVar
 import click
 
 from llm_grop.errors import BadInput
-from llm_grop.llm.registry import BACKENDS
-from llm_grop.simulation.mujoco.options import GRASPS
-from llm_grop.simulation.registry import DEFAULT_SIMULATOR
-from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
 
 log = logging.getLogger(__name__)
 
@@ -24,58 +21,12 @@ EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
 
 F = TypeVar("F", bound=Callable[..., Any])
 
-#: How to reach a backend: ``llm-grop serve`` takes these too.
-_BACKEND_OPTIONS = [
-    click.option("--model", help="Model name (openai) or GGUF path (embedded)."),
-    click.option("--base-url", help="OpenAI-compatible endpoint (default: $OPENAI_BASE_URL)."),
-    click.option("--replay", "replay_path", type=click.Path(dir_okay=False, path_type=Path),
-                 help="JSONL of recorded calls, for --llm replay."),
-    click.option("--timeout", "timeout_s", default=60.0, show_default=True,
-                 type=click.FloatRange(0, min_open=True),
-                 help="Seconds one LLM call may take, retries and their waits included."),
-    click.option("--max-answer-bytes", default=1024 * 1024, show_default=True,
-                 type=click.IntRange(1),
-                 help="The largest LLM answer accepted, bytes (openai); a larger one is an "
-                      "error."),
-    click.option("--retries", default=3, show_default=True, type=click.IntRange(0),
-                 help="Retries on transient LLM errors (connection, 429, 5xx)."),
-]
+#: ``--record`` of the commands that call an LLM in one process (not bench or sweep).
+RECORD = click.option("--record", "record_path", type=click.Path(dir_okay=False, path_type=Path),
+                      help="Append every LLM call to this JSONL file.")
 
-_LLM_OPTIONS = [
-    click.option("--llm", "backend", default="embedded", show_default=True,
-                 help="LLM backend: embedded, openai, replay, or a plugin's "
-                      "(see `llm-grop plugins`)."),
-    *_BACKEND_OPTIONS,
-    _RECORD := click.option("--record", "record_path",
-                            type=click.Path(dir_okay=False, path_type=Path),
-                            help="Append every LLM call to this JSONL file."),
-    click.option("--catalog", "catalog_files", multiple=True,
-                 type=click.Path(dir_okay=False, path_type=Path),
-                 help="An extra object catalog file (repeatable)."),
-    click.option("-m", "--configurations", "m", default=25, show_default=True,
-                 type=click.IntRange(1), help="Configurations to sample (M)."),
-    click.option("--attempts", default=3, show_default=True, type=click.IntRange(1),
-                 help="Template 1 prompts before keeping the largest consistent subset."),
-    click.option("--zero-shot", is_flag=True, help="Leave the paper's few-shot examples out."),
-    click.option("--notes", default="", help="Text for Template 1's [notes] slot."),
-    click.option("--prefer", "prefer", multiple=True, metavar="SENTENCE",
-                 help="A relation you want, e.g. 'the dinner fork to the left of the dinner "
-                      "plate'; it wins over the LLM (repeatable)."),
-    click.option("--preferences", "preferences_file",
-                 type=click.Path(dir_okay=False, path_type=Path),
-                 help="YAML file `preferences: [sentences]`; those whose objects are all "
-                      "requested apply."),
-    click.option("--temperature", default=0.1, show_default=True, type=float,
-                 help="Sampling temperature of every LLM call (the paper's 0.1)."),
-    click.option("--top-p", default=1.0, show_default=True, type=float,
-                 help="Nucleus sampling: keep the most likely tokens up to this probability."),
-    click.option("--max-tokens", default=512, show_default=True, type=click.IntRange(1),
-                 help="Most tokens one LLM answer may have."),
-    click.option("--frequency-penalty", default=0.0, show_default=True, type=float,
-                 help="Penalty on tokens by how often they appeared (OpenAI's meaning)."),
-    click.option("--presence-penalty", default=0.0, show_default=True, type=float,
-                 help="Penalty on tokens that appeared at all (OpenAI's meaning)."),
-]
+#: ``-q``: print nothing but errors.
+QUIET = click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 
 
 #: The suffix each picture or video flag's file must have (the format its writer makes),
@@ -223,129 +174,6 @@ class StagedOutputs:
         for _, tmp in self._staged.values():
             tmp.unlink(missing_ok=True)
         self._staged.clear()
-
-
-FEASIBILITY = click.option(
-    "--feasibility", default="default", show_default=True,
-    help="The planner's feasibility profile: default (assumed) or mujoco (fitted in 3D).")
-
-
-WEIGHT = click.option(
-    "--weight", "w", default=40.0, show_default=True, type=click.FloatRange(0),
-    help="GROP's utility weight w (seconds per unit of success probability).")
-
-FIDELITY_WEIGHT = click.option(
-    "--fidelity-weight", "fidelity_w", default=1.0, show_default=True,
-    type=click.FloatRange(0),
-    help="Seconds of GROP's utility that one centimetre of infidelity costs (stated gaps "
-         "missed, the setting's shift); 0 ignores fidelity.")
-
-
-def _parse_table(ctx: click.Context, param: click.Parameter, text: str | None) -> Table | None:
-    """``--table``'s text as a :class:`Table` (checked as the flags are read)."""
-    return None if text is None else Table.parse(text)
-
-
-#: ``--table`` of ``arrange``, ``run`` and ``bench``: the target table's top, a
-#: :class:`~llm_grop.world.table.Table` (``None``: the command's default).
-TABLE = click.option(
-    "--table", "table", metavar="WxD|round:D", callback=_parse_table,
-    help=f"The target table's top: WxD such as 120x80cm, 1.2x0.8m or 1200x800mm (a bare "
-         f"number is metres: 0.9x0.6), or round:D, a round top of diameter D such as "
-         f"round:120cm; each side {MIN_TABLE_SIDE_M:g} to {MAX_TABLE_SIDE_M:g} m "
-         f"[default: arrange 0.9x0.6 m; run and bench the scene's].")
-
-
-SIMULATOR = click.option(
-    "--simulator", default=DEFAULT_SIMULATOR, show_default=True,
-    help="The simulator that executes the plan (see `llm-grop plugins`).")
-
-TRUTH = click.option(
-    "--truth", metavar="PROFILE",
-    help="--simulator kinematic2d: draw outcomes and durations from this feasibility "
-         "profile (mujoco: what the 3D world was measured to do) [default: the 2D "
-         "simulator's own, the default profile's curves].")
-
-GRASP = click.option(
-    "--grasp", default="fix", show_default=True, type=click.Choice(GRASPS),
-    help="--simulator mujoco: how the hand holds. fix: a weld that attaches only when both "
-         "pads squeeze the object (Gazebo's grasp-fix); friction: contact friction alone "
-         "(the README lists what it can carry).")
-
-
-def attempt_flags(f: F) -> F:
-    """Add the executive's attempt counts, ``--nav-attempts`` and ``--manip-attempts``."""
-    f = click.option(
-        "--manip-attempts", "manip_attempts", type=click.IntRange(1),
-        help="Attempts per pick and per place of each object, re-grasps included "
-             "[default: the method's: 20 for llm-grop, 10 for the others, as the authors "
-             "ran them].")(f)
-    return click.option(
-        "--nav-attempts", "nav_attempts", default=3, show_default=True,
-        type=click.IntRange(1),
-        help="Attempts per navigation goal before the next fallback standing position.")(f)
-
-
-NO_GUESS = click.option(
-    "--no-guess", "no_guess", is_flag=True,
-    help="Refuse a request the LLM would have to complete: objects it does not name "
-         "(a meal, 'coffee'), or how many.")
-
-
-def backend_flags(f: F) -> F:
-    """Add the flags that say how to reach a backend (``--model``, ``--base-url``, ...)."""
-    for option in reversed(_BACKEND_OPTIONS):
-        f = option(f)
-    return f
-
-
-def backend_options(model: str | None, base_url: str | None, replay_path: Path | None,
-                    timeout_s: float, retries: int, max_answer_bytes: int, **_: Any) -> Any:
-    """The :class:`~llm_grop.llm.base.BackendOptions` of :func:`backend_flags`' flags."""
-    from llm_grop.llm.base import BackendOptions
-
-    return BackendOptions(model=model, base_url=base_url, timeout_s=timeout_s,
-                          max_retries=retries, replay_path=replay_path,
-                          max_answer_bytes=max_answer_bytes)
-
-
-def llm_flags(f: F) -> F:
-    """Add the LLM and arrangement flags to a command."""
-    for option in reversed(_LLM_OPTIONS):
-        f = option(f)
-    return f
-
-
-def llm_flags_without_record(f: F) -> F:
-    """The LLM and arrangement flags but ``--record`` (for commands that run in parallel)."""
-    for option in reversed(_LLM_OPTIONS):
-        if option is not _RECORD:
-            f = option(f)
-    return f
-
-
-def llm_settings(backend: str, model: str | None, base_url: str | None,
-                 replay_path: Path | None, m: int, attempts: int, zero_shot: bool, notes: str,
-                 temperature: float, top_p: float, max_tokens: int, frequency_penalty: float,
-                 presence_penalty: float, timeout_s: float, retries: int,
-                 prefer: tuple[str, ...] = (), preferences_file: Path | None = None,
-                 max_answer_bytes: int = 1024 * 1024, **_: Any) -> tuple[Any, Any]:
-    """``(BackendOptions, ArrangeOptions)`` from the flags of :func:`llm_flags`."""
-    from llm_grop.arrangement.pipeline import ArrangeOptions
-    from llm_grop.llm.base import SamplingParams
-
-    if BACKENDS.key(backend) == "replay" and replay_path is None:
-        raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
-    params = SamplingParams(temperature, top_p, max_tokens, frequency_penalty, presence_penalty)
-    from llm_grop.arrangement.preferences import load_preference_file
-
-    pool = load_preference_file(preferences_file) if preferences_file is not None else ()
-    options = ArrangeOptions(m=m, max_attempts=attempts, examples="" if zero_shot else None,
-                             notes=notes, params=params, preferences=tuple(prefer),
-                             preference_pool=pool)
-    llm_options = backend_options(model, base_url, replay_path, timeout_s, retries,
-                                  max_answer_bytes)
-    return llm_options, options
 
 
 def check_request(command: str, request: str | None, task: int | None) -> None:

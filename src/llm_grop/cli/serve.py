@@ -10,7 +10,8 @@ from typing import Any
 import click
 
 from llm_grop.cli.logs import VERBOSE
-from llm_grop.cli.options import EPILOG, backend_flags, backend_options, check_out_dir
+from llm_grop.cli.options import EPILOG, check_out_dir
+from llm_grop.cli.settings import LLM_FIELDS, flags, from_flags
 from llm_grop.errors import BadInput
 
 
@@ -28,7 +29,7 @@ def _default_db() -> Path:
 @click.option("--llm", "backends", multiple=True, default=("embedded",), show_default=True,
               help="An LLM backend clients may choose by name (repeatable; the first is the "
                    "default): embedded, openai, replay, or a plugin's.")
-@backend_flags
+@flags(*(f for f in LLM_FIELDS if f != "llm"))
 @click.option("--workers", default=2, show_default=True, type=click.IntRange(1, 64),
               help="Worker processes that run jobs.")
 @click.option("--llm-threads", type=click.IntRange(1),
@@ -52,7 +53,7 @@ def _default_db() -> Path:
                    "permalink; older ones are deleted hourly.")
 @click.option("--openapi", is_flag=True,
               help="Print the OpenAPI document (docs/schema/openapi.json) and exit.")
-def serve(host: str, port: int, backends: tuple[str, ...], replay_path: Path | None,
+def serve(host: str, port: int, backends: tuple[str, ...], replay: Path | None,
           workers: int, llm_threads: int | None, db: Path | None, token: str | None,
           run_time_s: float, queue: int, runs_per_client: int, keep_days: float,
           openapi: bool,
@@ -74,12 +75,15 @@ def serve(host: str, port: int, backends: tuple[str, ...], replay_path: Path | N
 
     check_bind(host, token)
     names = [BACKENDS.key(b) for b in dict.fromkeys(backends)]
-    if "replay" in names and replay_path is None:
-        raise BadInput("--llm replay needs --replay FILE (a JSONL written with --record)")
-    if replay_path is not None and not replay_path.is_file():
-        raise BadInput(f"--replay {replay_path}: no such file")
-    options = backend_options(
-        replay_path=replay_path.absolute() if replay_path else None, **flags)
+    if "replay" in names and replay is None:
+        raise BadInput("needs --replay FILE, a JSONL file of recorded calls", param="llm",
+                       value="replay")
+    if replay is not None and not replay.is_file():
+        raise BadInput("no such file", param="replay", value=replay)
+    from llm_grop.assembly import backend_options
+
+    options = backend_options(from_flags(
+        flags, replay=replay.absolute() if replay else None))
     db = (db or _default_db()).expanduser().absolute()
     check_out_dir("db", db.parent)
     db.parent.mkdir(parents=True, exist_ok=True)  # checked above: it can be made

@@ -2,88 +2,76 @@
 
 from __future__ import annotations
 
-import re
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import click
 
-from llm_grop.cli.bench import TrialProgress, bench, prepare_experiment
+from llm_grop.cli.bench import BENCH_DEFAULTS, TrialProgress, prepare_experiment
 from llm_grop.cli.execution import execution_flags, execution_settings
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG, check_out_dir
+from llm_grop.cli.settings import checked_settings
 from llm_grop.errors import BadInput
-from llm_grop.world.table import Table
+from llm_grop.settings import in_words
 
 if TYPE_CHECKING:
     from llm_grop.experiment.sweep import Values
 
-#: The bench flag behind each sweep file field, for messages about a cell.
-_FIELDS = {"--tasks": "tasks", "--methods": "methods", "--trials": "trials",
-           "--chairs": "chairs", "--table": "table", "--simulator": "simulator",
-           "--feasibility": "feasibility", "--weight": "weight", "--llm": "llm.backend",
-           "--model": "llm.model", "--base-url": "llm.base_url", "--replay": "llm.replay",
-           "--scene": "scene", "--preferences": "preferences"}
-_FLAG = re.compile(r"^(--[a-z-]+)\b")
-#: The sweep file field behind each API parameter an error may name, where they differ.
-_PARAMS = {"method": "methods", "planner.w": "weight",
-           "planner.fidelity_w_s_per_cm": "fidelity_weight", "llm": "llm.backend"}
+#: The sweep file's keys of an LLM entry -> the settings record's fields.
+_LLM_KEYS = {"backend": "llm", "model": "model", "base_url": "base_url", "replay": "replay",
+             "temperature": "temperature"}
 
 
-def bench_params(values: Values, base: Path) -> dict[str, Any]:
-    """What a sweep cell's values set of ``bench``'s parameters (paths relative to
-    ``base``); a value left out is left to the bench's default."""
+def cell_settings(values: Values, base: Path) -> dict[str, Any]:
+    """The settings record's fields a sweep cell's values set (paths relative to ``base``);
+    a value left out is left to the bench's default."""
+    from llm_grop.experiment.sweep import SWEPT
+    from llm_grop.settings import door
+
+    def path(p: str) -> str:
+        return str(base / Path(p).expanduser())
+
+    given: dict[str, Any] = {}
+    for key, name in SWEPT.items():
+        value = getattr(values, key)
+        if value is None:
+            continue
+        if door(name).path is not None:
+            value = tuple(map(path, value)) if isinstance(value, tuple) else path(value)
+        given[name] = value
+    if given.get("table") == "scene":
+        del given["table"]
+    llm = values.llm
+    if llm is not None:
+        given |= {_LLM_KEYS[k]: getattr(llm, k) for k in _LLM_KEYS
+                  if getattr(llm, k) is not None}
+        if llm.replay is not None:
+            given["replay"] = path(llm.replay)
+        if llm.model is not None:
+            # A GGUF file (embedded) is a path; a model's name is not.
+            gguf = llm.backend in (None, "embedded") and llm.model.lower().endswith(".gguf")
+            given["model"] = path(llm.model) if gguf else llm.model
+    return given
+
+
+def experiment_params(values: Values) -> dict[str, Any]:
+    """The bench's experiment parameters a sweep cell's values set, on the bench's
+    defaults: which tasks, trials and methods, and whether to draw pictures."""
     def joined(v: str | list[Any]) -> str:
         return v if isinstance(v, str) else ",".join(map(str, v))
 
-    def path(p: str) -> Path:
-        return base / Path(p).expanduser()
-
-    given: dict[str, Any] = {
-        "trials": values.trials, "seed": values.seed, "chairs": values.chairs,
-        "simulator": values.simulator, "feasibility": values.feasibility,
-        "w": values.weight, "fidelity_w": values.fidelity_weight}
+    given = dict(BENCH_DEFAULTS)
     if values.tasks is not None:
         given["tasks_text"] = joined(values.tasks)
     if values.methods is not None:
         given["methods_text"] = joined(values.methods)
-    if values.scene is not None:
-        given["scene_path"] = path(values.scene)
-    if values.table not in (None, "scene"):
-        given["table"] = Table.parse(values.table)
+    if values.trials is not None:
+        given["trials"] = values.trials
     if values.images is not None:
         given["no_images"] = not values.images
-    if values.preferences is not None:
-        given["preferences_file"] = path(values.preferences)
-    llm = values.llm
-    if llm is not None:
-        given |= {"backend": llm.backend, "base_url": llm.base_url,
-                  "temperature": llm.temperature}
-        if llm.replay is not None:
-            given["replay_path"] = path(llm.replay)
-        if llm.model is not None:
-            # A GGUF file (embedded) is a path; a model's name is not.
-            gguf = llm.backend in (None, "embedded") and llm.model.lower().endswith(".gguf")
-            given["model"] = str(path(llm.model)) if gguf else llm.model
-    return {k: v for k, v in given.items() if v is not None}
-
-
-def bench_defaults() -> dict[str, Any]:
-    """``bench``'s parameters as its flags leave them when none is given (parsed under
-    this command's context, so that ``-v`` keeps its count)."""
-    return dict(bench.make_context("bench", [], parent=click.get_current_context()).params)
-
-
-def _in_file(exc: BadInput, where: str) -> BadInput:
-    """``exc`` about a bench flag or an API parameter, said of the sweep file's field
-    instead."""
-    if exc.param is not None:
-        field = _PARAMS.get(exc.param, exc.param)
-        named = field if exc.value is None else f"{field} {exc.value}"
-        return BadInput(f"{where}: {named}: {exc.detail}")
-    text = _FLAG.sub(lambda m: _FIELDS.get(m.group(1), m.group(1)), str(exc), count=1)
-    return BadInput(f"{where}: {text}")
+    return given
 
 
 @click.command(epilog=EPILOG)
@@ -114,15 +102,15 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
                        "or new directory")
     plan = load_sweep(sweep_file)
     executor, threads, cache = execution_settings(**flags)
-    defaults = bench_defaults()
     cells = []
     for cell in plan.cells:
         try:
-            params = defaults | bench_params(cell.values, plan.base)
-            exp = prepare_experiment(**(params | {"out_dir": out_dir / cell.name}),
-                                     threads=threads, cache=cache)
+            settings = checked_settings(cell_settings(cell.values, plan.base), cache=cache)
+            exp = prepare_experiment(settings, **experiment_params(cell.values),
+                                     out_dir=out_dir / cell.name, threads=threads)
         except BadInput as exc:
-            raise _in_file(exc, f"{sweep_file}: cell {cell.name}") from None
+            raise BadInput(f"{sweep_file}: cell {cell.name}: {in_words(exc, 'sweep')}") \
+                from None
         cells.append(Cell(exp, out_dir / cell.name))
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json(out_dir / MARKER, {"format": 1, "sweep": str(sweep_file), "axes": plan.axes,

@@ -11,6 +11,7 @@ import time
 import httpx
 
 from llm_grop.doctor.check import Check, Status, one_line
+from llm_grop.settings import DEFAULTS
 
 #: How long the server has to answer, in seconds.
 SERVER_TIMEOUT_S = 5.0
@@ -20,7 +21,7 @@ _MAX_LISTED = 8
 #: Most characters of a name or reason from the server shown on the report's line.
 _MAX_SHOWN = 120
 #: The largest answer to ``GET /models`` read, in bytes.
-MAX_ANSWER_BYTES = 1024 * 1024
+MAX_ANSWER_BYTES = DEFAULTS.max_answer_bytes
 
 _NAME = "openai server"
 

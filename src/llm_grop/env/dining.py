@@ -53,7 +53,7 @@ from llm_grop.execution.judge import judged_place
 from llm_grop.planning.navigation import Navigator
 from llm_grop.render.room import room_image
 from llm_grop.simulation.base import Session, Simulator
-from llm_grop.simulation.registry import create_simulator
+from llm_grop.simulation.registry import DEFAULT_SIMULATOR, create_simulator
 from llm_grop.simulation.scenario import prepare_episode
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Pose2D
@@ -97,7 +97,7 @@ class DiningRoomEnv(gymnasium.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
 
     def __init__(self, objects: Sequence[str] | None = None, *, task: int = 8,
-                 simulator: str | Simulator = "kinematic2d",
+                 simulator: str | Simulator = DEFAULT_SIMULATOR,
                  scene: Scene | str | None = None, chairs: int = 1, camera: bool = False,
                  image_size: tuple[int, int] = (160, 120), max_steps: int | None = None,
                  render_mode: str | None = None, policy: ExecutionPolicy | None = None
@@ -108,9 +108,6 @@ class DiningRoomEnv(gymnasium.Env):
         self.names = [i.name for i in self.items]
         self.simulator = create_simulator(simulator) if isinstance(simulator, str) \
             else simulator
-        if not hasattr(self.simulator, "session"):
-            raise BadInput(f"simulator {self.simulator.name!r} cannot be driven one action "
-                           "at a time (it has no session)")
         if render_mode not in (None, "rgb_array"):
             raise BadInput("use None or 'rgb_array'", param="render_mode", value=render_mode)
         if max_steps is not None and max_steps < 1:
@@ -126,8 +123,7 @@ class DiningRoomEnv(gymnasium.Env):
         self.chairs, self.camera, self.image_size = chairs, camera, image_size
         self.max_steps, self.render_mode = max_steps, render_mode
         self.policy = policy or ExecutionPolicy()
-        if hasattr(self.simulator, "check"):
-            self.simulator.check(self.scene, self.items)
+        self.simulator.check(self.scene, self.items)
         self.observation_space = observation_space(self.scene, self.items, chairs,
                                                    image_size if camera else None)
         self.action_space = action_space(len(self.items))
@@ -222,8 +218,8 @@ class DiningRoomEnv(gymnasium.Env):
     def _image(self) -> np.ndarray:
         """The simulator's own view of the room, else a drawing of its state."""
         assert self.session is not None and self.episode_scene is not None
-        if hasattr(self.session, "picture"):
-            return self.session.picture("room", self.image_size)  # type: ignore[no-any-return]
+        if self.simulator.supports_pictures:
+            return self.simulator.picture("room", self.image_size)
         states = self.session.objects()
         return room_image(self.episode_scene, self.session.robot_pose(),
                           {n: (s.x, s.y) for n, s in states.items()}, self.image_size)

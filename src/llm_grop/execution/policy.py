@@ -6,10 +6,11 @@ import math
 from dataclasses import dataclass, replace
 
 from llm_grop.errors import BadInput
+from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import UPRIGHT_TILT_RAD
 
 #: Attempts per navigation goal, as in the authors' experiment.
-NAV_ATTEMPTS = 3
+NAV_ATTEMPTS = DEFAULTS.nav_attempts
 #: Attempts per pick and per place for LLM-GROP, as in the authors' experiment.
 LLM_GROP_MANIP_ATTEMPTS = 20
 #: Attempts per pick and per place for the baselines, as in the authors' experiment.

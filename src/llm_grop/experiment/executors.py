@@ -23,7 +23,7 @@ import logging
 import multiprocessing
 import os
 import signal
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Generator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
@@ -60,13 +60,15 @@ class Executor(Protocol):
     ``run`` may be left unfinished (the driver stops iterating on Ctrl-C or an error):
     closing the iterator stops the work still under way. ``registered`` holds the plugin
     entries registered at run time that workers must register again; ``spawns`` says
-    whether jobs run in other processes (which need them).
+    whether jobs run in other processes (which need them), and ``workers`` how many
+    jobs it runs at once (``None``: as many as its cluster allows).
     """
 
     name: str
     spawns: bool
+    workers: int | None
 
-    def run(self, jobs: Sequence[Job], registered: Registered) -> Iterator[Done]: ...
+    def run(self, jobs: Sequence[Job], registered: Registered) -> Generator[Done, None, None]: ...
 
 
 # Each pool worker process keeps its own runners; a failure to start is reported with its
@@ -106,7 +108,7 @@ class LocalExecutor:
         self.workers = options.workers or 1
         self.spawns = self.workers > 1
 
-    def run(self, jobs: Sequence[Job], registered: Registered) -> Iterator[Done]:
+    def run(self, jobs: Sequence[Job], registered: Registered) -> Generator[Done, None, None]:
         """Every job's :class:`Done`, in the order they finish."""
         if not jobs:
             return
@@ -129,7 +131,7 @@ class LocalExecutor:
 
 def describe(executor: Executor) -> str:
     """How ``executor`` runs trials, for a summary line: ``2 local workers``, ``ray``."""
-    workers = getattr(executor, "workers", None)
+    workers = executor.workers
     if executor.name == "local":
         return f"{workers} local worker{'s' if workers != 1 else ''}"
     return f"{executor.name}" + (f" ({workers} at once)" if workers else "")
@@ -148,7 +150,8 @@ EXECUTORS: Registry[Any] = Registry(
     group="llm_grop.executors", kind="executor", flag="--executor", module=__name__,
     builtins={"local": "llm_grop.experiment.executors:LocalExecutor",
               "ray": "llm_grop.experiment.ray_executor:RayExecutor"},
-    factory="(ExecutorOptions) -> Executor", product=("name", "spawns", "run"))
+    factory="(ExecutorOptions) -> Executor", protocol=Executor,
+    product=("name", "spawns", "workers", "run"))
 
 
 def create_executor(name: str, options: ExecutorOptions | None = None) -> Executor:

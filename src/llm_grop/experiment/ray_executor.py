@@ -39,7 +39,7 @@ import socket
 import subprocess
 import sys
 from collections import deque
-from collections.abc import Iterator, Sequence
+from collections.abc import Generator, Iterator, Sequence
 from typing import Any
 
 from llm_grop import plugins
@@ -89,7 +89,7 @@ class RayExecutor:
         self.workers = options.workers
         self._watchdog: subprocess.Popen[bytes] | None = None
 
-    def run(self, jobs: Sequence[Job], registered: Registered) -> Iterator[Done]:
+    def run(self, jobs: Sequence[Job], registered: Registered) -> Generator[Done, None, None]:
         """Every job's :class:`Done`, in the order they finish."""
         if not jobs:
             return

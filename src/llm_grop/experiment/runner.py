@@ -33,14 +33,13 @@ import logging
 import os
 import secrets
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from importlib import metadata, resources
 from pathlib import Path
 from typing import Any
 
 from llm_grop import locking, plugins
 from llm_grop.errors import BadInput, LLMUnavailable
-from llm_grop.execution.policy import NAV_ATTEMPTS
 from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
 from llm_grop.experiment.paired import PairedComparison, paired_by_trial
 from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
@@ -97,33 +96,25 @@ def _digest(paths: Sequence[str | os.PathLike[str]]) -> str:
 
 
 def identity(exp: Experiment) -> dict[str, Any]:
-    """The settings that decide a trial's result; equal identities may share a directory."""
-    s = exp.settings
+    """The settings that decide a trial's result, named as the settings record's fields
+    (:meth:`~llm_grop.settings.RunSettings.identity`), files by their contents' digests;
+    equal identities may share a directory. Each trial sets its own method, task and seed
+    (``seed`` is trial 0's)."""
+    s = exp.settings.run
     tasks = resources.files("llm_grop").joinpath("data/tasks.yaml").read_bytes()
     catalog = resources.files("llm_grop").joinpath("data/catalog.yaml").read_bytes()
-    opts = s.llm_options
+    doc = s.identity()
+    for name in ("task", "method", "task_files", "catalog_files"):
+        doc.pop(name)
+    for name in ("replay", "preferences_file"):
+        doc[name] = _digest([doc[name]]) if doc[name] else None
     return {
-        "format": 1,
+        "format": 2,
         "version": metadata.version("llm-grop"),
-        "llm": {"backend": s.backend, "model": opts.model, "base_url": opts.base_url,
-                "replay": _digest([opts.replay_path]) if opts.replay_path else None},
-        "arrange": json.loads(json.dumps(asdict(s.arrange), default=str)),
+        **doc,
         "scene": _digest([s.scene]) if s.scene else "packaged",
-        "chairs": s.chairs,
-        # Absent for the scene's own table, so directories written before --table resume.
-        **({"table": s.table} if s.table is not None else {}),
-        "w": s.w,
-        "fidelity_weight_s_per_cm": s.fidelity_w_s_per_cm,
-        "simulator": s.simulator,
-        # Absent for the default, so directories written before profiles existed resume.
-        **({"feasibility": s.feasibility} if s.feasibility != "default" else {}),
-        # Absent for the defaults, like the other settings added after the first release.
-        **({"nav_attempts": s.nav_attempts} if s.nav_attempts != NAV_ATTEMPTS else {}),
-        **({"manip_attempts": s.manip_attempts} if s.manip_attempts is not None else {}),
-        **({"grasp": s.grasp} if s.grasp != "fix" else {}),
-        **({"truth": s.truth} if s.truth is not None else {}),
-        "plugins": _plugin_origins(exp),
         "seed": exp.seed,
+        "plugins": _plugin_origins(exp),
         "tasks": hashlib.sha256(tasks).hexdigest()[:16] + (
             "+" + _digest(s.task_files) if s.task_files else ""),
         "catalog": hashlib.sha256(catalog).hexdigest()[:16] + (
@@ -134,7 +125,7 @@ def identity(exp: Experiment) -> dict[str, Any]:
 def _plugin_origins(exp: Experiment) -> dict[str, str]:
     """Where each component the experiment uses comes from, when llm-grop does not ship it
     (a plugin's version decides its results as llm-grop's own version does)."""
-    used = [(BACKENDS, exp.settings.backend), (SIMULATORS, exp.settings.simulator),
+    used = [(BACKENDS, exp.settings.run.llm), (SIMULATORS, exp.settings.run.simulator),
             *((METHODS, m) for m in exp.methods)]
     origins = {f"{reg.kind} {name}": reg.origin(name) for reg, name in used}
     return {k: v for k, v in origins.items() if v != "llm-grop"}
@@ -253,8 +244,8 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
     """
     used: dict[str, list[str]] = {BACKENDS.group: [], SIMULATORS.group: [], METHODS.group: []}
     for cell in cells:
-        s = cell.experiment.settings
-        used[BACKENDS.group].append(s.backend)
+        s = cell.experiment.settings.run
+        used[BACKENDS.group].append(s.llm)
         used[SIMULATORS.group].append(s.simulator)
         used[METHODS.group] += cell.experiment.methods
     # Checked before any directory is made: an entry that cannot reach workers fails now.
@@ -322,9 +313,7 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
     except KeyboardInterrupt:
         interrupted = True
     finally:
-        close = getattr(results, "close", None)
-        if close is not None:
-            close()  # stops the work still under way
+        results.close()  # stops the work still under way
     outcomes = []
     for index, cell in enumerate(cells):
         if not interrupted:

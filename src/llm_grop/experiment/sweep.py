@@ -14,13 +14,16 @@ combination of them::
       chairs: [0, 1, 4]
       table: [scene, 1.8x0.9m, round:1.2m]
 
-Keys (:class:`Values`): ``tasks``, ``methods``, ``trials``, ``seed``, ``scene``,
-``chairs``, ``table``, ``simulator``, ``feasibility``, ``weight``, ``fidelity_weight``,
-``llm`` (``backend``, ``model``, ``base_url``, ``replay``, ``temperature``, and a ``name``
-for the cell's directory), ``preferences`` and ``images``. A key left out takes the
-bench's default. Paths are relative to the sweep file. Each cell is an experiment
-directory named after its grid values (``chairs=4,table=round_1.2m``), resumable and
-refused if it holds another experiment's results, as ``llm-grop bench --out`` is.
+Keys (:class:`Values`): ``tasks``, ``methods``, ``trials``, ``images``, ``llm``
+(``backend``, ``model``, ``base_url``, ``replay``, ``temperature``, and a ``name`` for the
+cell's directory), and every other setting of a run by its name in the settings record
+(:class:`~llm_grop.settings.RunSettings`): ``seed``, ``scene``, ``chairs``, ``table``,
+``simulator``, ``feasibility``, ``weight``, ``fidelity_weight``, ``m``, ``nav_attempts``,
+``grasp``, ...; ``preferences`` is a preferences file and ``prefer`` a list of sentences.
+A key left out takes the bench's default. Paths are relative to the sweep file. Each cell is
+an experiment directory named after its grid values (``chairs=4,table=round_1.2m``),
+resumable and refused if it holds another experiment's results, as ``llm-grop bench --out``
+is.
 
 One value stands for a list of one: ``tasks: 3`` is ``tasks: [3]``, and in ``grid``
 ``chairs: 4`` is ``chairs: [4]`` (a grid key of one value still names the cells). In
@@ -54,6 +57,7 @@ from pydantic import (
 )
 
 from llm_grop.errors import BadInput
+from llm_grop.settings import RunSettings, door
 from llm_grop.world.datafile import load_yaml_model
 
 #: Longest cell directory name, in characters (a file system allows 255 bytes).
@@ -96,28 +100,50 @@ class LLMEntry(BaseModel):
             f"-{Path(self.model).name}" if self.model else "")
 
 
-class Values(BaseModel):
-    """One cell's settings, in the bench's terms (units: ``weight`` seconds,
-    ``fidelity_weight`` seconds per centimetre). A key left out, or ``null``, takes the
-    bench's default; for ``chairs`` and ``table`` (also ``table: scene``) that is the
-    scene's own."""
+#: Settings a sweep file does not set: each trial's own, and how answers are cached.
+_NOT_SWEPT = ("task", "method", "cache")
+
+
+def _setting_field(name: str) -> tuple[Any, Any]:
+    """The settings record's field ``name`` as an optional key of a sweep file, checked as
+    the record checks it."""
+    f = RunSettings.model_fields[name]
+    one = Annotated[(f.annotation, *f.metadata)] if f.metadata else f.annotation
+    return (one | None, Field(None, description=f.description))  # type: ignore[operator]
+
+
+#: Each settings field a sweep file sets by a key of its own, by that key (the field's
+#: sweep name: ``preferences`` is the preferences file; the LLM's are under ``llm``).
+SWEPT: dict[str, str] = {door(n).sweep or n: n for n in RunSettings.model_fields
+                         if n not in _NOT_SWEPT and "." not in (door(n).sweep or "")}
+
+
+#: The keys whose value is itself a list (a setting that holds several).
+_MANY = tuple(key for key, name in SWEPT.items()
+              if RunSettings.model_fields[name].default == ())
+
+
+class _Experiment(BaseModel):
+    """A cell's keys that are no setting of a run: which tasks, methods and trials, and
+    whether to draw each trial's final table."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     tasks: Tasks | None = None
     methods: Text | list[Text] | None = None
     trials: Annotated[int, Field(ge=1)] | None = None
-    seed: Annotated[int, Field(ge=0)] | None = None
-    scene: Text | None = None
-    chairs: Annotated[int, Field(ge=0)] | None = None
-    table: Text | None = None
-    simulator: Text | None = None
-    feasibility: Text | None = None
-    weight: Annotated[float, Field(ge=0)] | None = None
-    fidelity_weight: Annotated[float, Field(ge=0)] | None = None
-    llm: LLMEntry | None = None
-    preferences: Text | None = None
     images: bool | None = None
+    llm: LLMEntry | None = None
+
+
+#: One cell's settings, in the bench's terms: :class:`_Experiment`'s keys and every field
+#: of the settings record (:data:`SWEPT`; units as the record's help says: ``weight``
+#: seconds, ``fidelity_weight`` seconds per centimetre). A key left out, or ``null``,
+#: takes the bench's default; for ``chairs`` and ``table`` (also ``table: scene``) that is
+#: the scene's own.
+Values = create_model(  # type: ignore[call-overload]
+    "Values", __base__=_Experiment,
+    **{key: _setting_field(name) for key, name in SWEPT.items()})
 
 
 def _as_list(value: Any) -> Any:
@@ -140,13 +166,13 @@ Grid = create_model(  # type: ignore[call-overload]
     **{name: _grid_field(f) for name, f in Values.model_fields.items()})
 
 
-class SweepFile(Values):
+class SweepFile(Values):  # type: ignore[misc, valid-type]
     """A sweep file: the values every cell shares, and the ``grid`` of those that vary."""
 
     grid: Grid = Field(default_factory=Grid)  # type: ignore[valid-type]
 
-    @field_validator(*(k for k in Values.model_fields if k not in ("tasks", "methods")),
-                     mode="before")
+    @field_validator(*(k for k in Values.model_fields if k not in ("tasks", "methods")
+                       and k not in _MANY), mode="before")
     @classmethod
     def _one_value(cls, value: Any, info: ValidationInfo) -> Any:
         # A list at the top level is most likely meant as the grid's.
@@ -163,7 +189,7 @@ class SweepCell:
 
     name: str
     axes: Mapping[str, str]
-    values: Values
+    values: Values  # type: ignore[valid-type]
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ from typing import Any, Protocol, runtime_checkable
 
 from llm_grop.llm.cache import CallKey, LLMCache, backend_identity
 from llm_grop.llm.record import LLMCallRecord, append_record
+from llm_grop.settings import DEFAULTS
 
 log = logging.getLogger(__name__)
 
@@ -22,11 +23,11 @@ class SamplingParams:
     ``seed`` makes a call repeatable; re-prompting resamples by changing it.
     """
 
-    temperature: float = 0.1
-    top_p: float = 1.0
-    max_tokens: int = 512
-    frequency_penalty: float = 0.0
-    presence_penalty: float = 0.0
+    temperature: float = DEFAULTS.temperature
+    top_p: float = DEFAULTS.top_p
+    max_tokens: int = DEFAULTS.max_tokens
+    frequency_penalty: float = DEFAULTS.frequency_penalty
+    presence_penalty: float = DEFAULTS.presence_penalty
     seed: int | None = None
 
     def with_seed(self, seed: int | None) -> SamplingParams:
@@ -50,9 +51,9 @@ class BackendOptions:
     model: str | None = None
     base_url: str | None = None
     api_key: str | None = None
-    timeout_s: float = 60.0
-    max_retries: int = 3
-    max_answer_bytes: int = 1024 * 1024
+    timeout_s: float = DEFAULTS.timeout_s
+    max_retries: int = DEFAULTS.retries
+    max_answer_bytes: int = DEFAULTS.max_answer_bytes
     replay_path: Path | None = None
     n_threads: int | None = None
 
@@ -65,17 +66,40 @@ class LLM(Protocol):
     ``grammar`` is an optional GBNF grammar that constrains the output; backends
     that cannot enforce one ignore it.
 
-    A backend that can constrain its output to a JSON Schema says so with a true
-    ``accepts_schema`` attribute; :class:`CallLog` then passes the schema as the keyword
-    ``schema`` (a JSON Schema object). The prompt still asks for a format that reads
-    without it, for servers that turn structured output down.
+    Besides answering, a backend declares what it can do (a plugin inherits the
+    defaults from :class:`BaseLLM`); callers read the declaration and never probe:
+
+    - ``supports_schema``: it can constrain its output to a JSON Schema; :class:`CallLog`
+      then passes the schema as the keyword ``schema`` (a JSON Schema object). The prompt
+      still asks for a format that reads without it, for servers that turn structured
+      output down.
+    - ``cache_identity``: what its answers depend on (a model file and llama.cpp's
+      version, an endpoint and model, a recording's digest), for the LLM cache's key;
+      ``None``: its answers are never cached.
+    - :meth:`close` releases what it holds (a model, connections).
     """
 
     backend: str
     model: str
+    supports_schema: bool
+    cache_identity: str | None
 
     def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
                  ) -> LLMCallRecord: ...
+
+    def close(self) -> None: ...
+
+
+class BaseLLM:
+    """The declarations of :class:`LLM` with the defaults a plugin backend inherits: no
+    JSON Schema, never cached, nothing to release."""
+
+    supports_schema: bool = False
+    cache_identity: str | None = None
+
+    def close(self) -> None:
+        """Release what the backend holds (nothing, by default)."""
+        return None
 
 
 @dataclass
@@ -110,7 +134,7 @@ class CallLog:
         """The backend's answer to ``prompt``, kept and recorded; ``schema`` (a JSON Schema
         for the answer) reaches only backends that accept one."""
         t0 = time.perf_counter()
-        if not getattr(self.llm, "accepts_schema", False):
+        if not self.llm.supports_schema:
             schema = None
         # An unseeded call is asked to differ from the last, so it is never cached.
         identity = backend_identity(self.llm) \

@@ -49,11 +49,11 @@ def default_dir() -> Path:
 
 
 def backend_identity(llm: Any) -> str | None:
-    """What a backend answers from, for the cache key: its ``cache_identity`` (the
+    """What a backend answers from, for the cache key: its declared ``cache_identity`` (the
     embedded backend names its model file and llama.cpp's version, openai its endpoint
     and model, replay its recording's digest). ``None``, and so no caching, for a backend
-    without one: a plugin opts in by saying what its answers depend on."""
-    own = getattr(llm, "cache_identity", None)
+    that declares none: a plugin opts in by saying what its answers depend on."""
+    own = llm.cache_identity
     return str(own) if own else None
 
 

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from llm_grop.errors import BadInput, LLMError, LLMUnavailable
-from llm_grop.llm.base import BackendOptions, SamplingParams
+from llm_grop.llm.base import BackendOptions, BaseLLM, SamplingParams
 from llm_grop.llm.record import LLMCallRecord
 
 if TYPE_CHECKING:
@@ -59,7 +59,7 @@ _SEED_MODULUS = 2**32 - 1
 _ROOT_RULE = re.compile(r"^\s*root\s*::=", re.MULTILINE)
 
 
-class EmbeddedLLM:
+class EmbeddedLLM(BaseLLM):
     """A GGUF chat model run in-process; the model is loaded on the first call.
 
     ``load_s`` is the time the load took in seconds (``None`` before it happens);

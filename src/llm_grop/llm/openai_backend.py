@@ -45,7 +45,7 @@ import httpx
 import openai
 
 from llm_grop.errors import LLMTransient, LLMUnavailable
-from llm_grop.llm.base import BackendOptions, SamplingParams
+from llm_grop.llm.base import BackendOptions, BaseLLM, SamplingParams
 from llm_grop.llm.record import LLMCallRecord
 
 #: The model used when ``BackendOptions.model`` is ``None``.
@@ -76,7 +76,7 @@ _TIMEOUTS: tuple[type[Exception], ...] = tuple(m.TimeoutException for m in _http
 _HTTP_ERRORS: tuple[type[Exception], ...] = tuple(m.HTTPError for m in _http_modules())
 
 
-class OpenAILLM:
+class OpenAILLM(BaseLLM):
     """A chat model behind an OpenAI-compatible HTTP endpoint.
 
     ``complete`` sends the prompt as one user message. The record's ``latency_s`` is
@@ -84,7 +84,7 @@ class OpenAILLM:
     """
 
     backend: str = "openai"
-    accepts_schema: bool = True
+    supports_schema: bool = True
 
     def __init__(self, options: BackendOptions) -> None:
         self.model: str = options.model or DEFAULT_MODEL
@@ -284,7 +284,7 @@ class OpenAILLM:
         if isinstance(exc, _TooLarge):
             return LLMUnavailable(f"openai backend: the answer from {where} is larger than "
                                   f"{self._max_bytes} bytes; refused (raise "
-                                  "max_answer_bytes if it should be allowed)")
+                                  "max_answer_bytes=N if it should be allowed)")
         if isinstance(exc, _PastDeadline):
             first = self._unavailable(exc.cause)
             return LLMTransient(f"{str(first).removesuffix(self._after_retries())}; its "

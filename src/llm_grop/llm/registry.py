@@ -16,7 +16,8 @@ BACKENDS: Registry[Factory] = Registry(
     builtins={"embedded": "llm_grop.llm.embedded:EmbeddedLLM",
               "openai": "llm_grop.llm.openai_backend:OpenAILLM",
               "replay": "llm_grop.llm.replay:ReplayLLM"},
-    factory="(BackendOptions) -> LLM", product=("backend", "model", "complete"))
+    factory="(BackendOptions) -> LLM", protocol=LLM,
+    product=("backend", "model", "supports_schema", "cache_identity", "complete", "close"))
 
 
 def register_backend(name: str, factory: Factory) -> None:

@@ -14,13 +14,13 @@ from dataclasses import asdict, replace
 from pathlib import Path
 
 from llm_grop.errors import BadInput, ReplayMissing
-from llm_grop.llm.base import BackendOptions, SamplingParams
+from llm_grop.llm.base import BackendOptions, BaseLLM, SamplingParams
 from llm_grop.llm.record import LLMCallRecord, load_records
 
 #: Characters of the prompt quoted in a ReplayMissing message.
 _PROMPT_PREVIEW = 60
 
-class ReplayLLM:
+class ReplayLLM(BaseLLM):
     """Serves the responses of a record file instead of calling a model.
 
     A call is looked up by ``(prompt, seed)``; sampling settings and grammar play no

@@ -18,7 +18,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 
 from llm_grop import seeds
 from llm_grop.arrangement.pipeline import ArrangeOptions, arrange_items
@@ -26,11 +26,18 @@ from llm_grop.arrangement.random_placement import random_configurations
 from llm_grop.errors import BadInput
 from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.llm.base import CallLog
+from llm_grop.planning.grop import choose
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.fidelity import Fidelity
 from llm_grop.world.request import Request
 from llm_grop.world.table import Table
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from llm_grop.planning.grop import Candidate
+    from llm_grop.planning.utility import PlanningContext
 
 
 @dataclass(frozen=True)
@@ -63,29 +70,120 @@ class Proposal:
     fidelity: tuple[Fidelity, ...] = ()
 
 
-class Method(Protocol):
-    """A compared method."""
+class ArrangementSource(Protocol):
+    """Where a method's arrangement comes from: ``uses_llm`` says whether it asks the LLM
+    (the episode then gives it one), :meth:`propose` makes the arrangement and the
+    configurations to plan for."""
 
-    name: str
-    description: str
     uses_llm: bool
-    standing: Literal["utility", "uniform"]
-    best_of_all: bool
 
     def propose(self, inp: EpisodeInput) -> Proposal:
         """The arrangement and the configurations to plan for."""
         ...
 
 
+class StandingChoice(Protocol):
+    """How a method picks its standing positions, and which configuration to plan for."""
+
+    def choose(self, ctx: PlanningContext, proposal: Proposal,
+               rng: np.random.Generator) -> Candidate:
+        """The configuration and standing positions to plan with, from ``proposal``'s
+        configurations in ``ctx``; raises :class:`~llm_grop.errors.Infeasible` when
+        none has a plan."""
+        ...
+
+
+@runtime_checkable
+class Method(Protocol):
+    """A compared method: its name and description, and what it chooses, as typed parts:
+    its ``arrangement`` (an :class:`ArrangementSource`), its standing positions
+    (``standing_choice``, a :class:`StandingChoice`) and its attempts per pick and place
+    when executing (``manip_attempts``). The episode runs these parts and interprets no
+    flag of a method's."""
+
+    name: str
+    description: str
+
+    @property
+    def arrangement(self) -> ArrangementSource:
+        """Where its arrangement comes from."""
+        ...
+
+    @property
+    def standing_choice(self) -> StandingChoice:
+        """How it picks standing positions."""
+        ...
+
+    @property
+    def manip_attempts(self) -> int:
+        """Attempts per pick and per place of each object when executing."""
+        ...
+
+
+@dataclass(frozen=True)
+class LLMArrangement:
+    """The paper's arrangement (§III-A, §III-B): the LLM's relations made consistent and
+    M configurations sampled around its positions."""
+
+    uses_llm: bool = True
+
+    def propose(self, inp: EpisodeInput) -> Proposal:
+        t0 = time.perf_counter()
+        if inp.llm is None:
+            raise BadInput("this method needs an LLM", param="method")
+        before = inp.llm.wall_s
+        result = arrange_items(inp.reading or inp.request, inp.items, inp.llm, inp.catalog,
+                               inp.table, inp.seed, inp.options, inp.on_event)
+        llm_s = inp.llm.wall_s - before
+        return Proposal(result.arrangement, result.configurations,
+                        max(time.perf_counter() - t0 - llm_s, 0.0), result.fidelity)
+
+
+@dataclass(frozen=True)
+class RandomArrangement:
+    """The baselines' arrangement: M collision-free random configurations, drawn from
+    the seed's ``random_arrangement`` stream."""
+
+    uses_llm: bool = False
+
+    def propose(self, inp: EpisodeInput) -> Proposal:
+        t0 = time.perf_counter()
+        rng = seeds.stream(inp.seed, "random_arrangement")
+        configs = random_configurations(inp.items, inp.table, rng, m=inp.options.m)
+        arrangement = Arrangement(inp.request, inp.table, configs[0].placements)
+        return Proposal(arrangement, configs, time.perf_counter() - t0)
+
+
+@dataclass(frozen=True)
+class PolicyStanding:
+    """Standing positions by a policy of the planner's (:func:`~llm_grop.planning.grop.choose`):
+    ``utility`` (GROP's, the best expected utility) or ``uniform`` (at random among those
+    within good reach); ``best_of_all`` plans for every configuration and keeps the best,
+    else the first that has a plan."""
+
+    policy: Literal["utility", "uniform"] = "utility"
+    best_of_all: bool = True
+
+    def __post_init__(self) -> None:
+        if self.policy not in ("utility", "uniform"):
+            raise BadInput(f"standing must be 'utility' or 'uniform', got {self.policy!r}",
+                           param="method")
+
+    def choose(self, ctx: PlanningContext, proposal: Proposal,
+               rng: np.random.Generator) -> Candidate:
+        return choose(ctx, proposal.configurations, self.policy, rng, self.best_of_all,
+                      proposal.fidelity)
+
+
 @dataclass(frozen=True)
 class ComposedMethod:
-    """A method built from an arrangement source and a standing policy.
+    """A method built from an arrangement source and a standing policy, declared in a line.
 
-    ``uses_llm``: arrangement from the LLM pipeline, else random. ``standing``: ``utility``
-    (GROP) or ``uniform``. ``best_of_all``: plan for all M configurations and keep the best
-    (GROP), else the first that has a plan. ``manip_attempts``: attempts per pick and per
-    place when executing (the authors gave LLM-GROP 20 and the baselines 10); a method
-    without it gets the baselines' count.
+    ``uses_llm``: arrangement from the LLM pipeline (:class:`LLMArrangement`), else random
+    (:class:`RandomArrangement`). ``standing``: ``utility`` (GROP) or ``uniform``.
+    ``best_of_all``: plan for all M configurations and keep the best (GROP), else the
+    first that has a plan. ``manip_attempts``: attempts per pick and per place when
+    executing (the authors gave LLM-GROP 20 and the baselines 10).
     """
 
     name: str
@@ -95,23 +193,18 @@ class ComposedMethod:
     best_of_all: bool
     manip_attempts: int = BASELINE_MANIP_ATTEMPTS
 
-    def propose(self, inp: EpisodeInput) -> Proposal:
-        t0 = time.perf_counter()
-        if self.uses_llm:
-            if inp.llm is None:
-                raise BadInput(f"method {self.name!r} needs an LLM")
-            before = inp.llm.wall_s
-            result = arrange_items(inp.reading or inp.request, inp.items, inp.llm,
-                                   inp.catalog, inp.table, inp.seed, inp.options,
-                                   inp.on_event)
-            llm_s = inp.llm.wall_s - before
-            return Proposal(result.arrangement, result.configurations,
-                            max(time.perf_counter() - t0 - llm_s, 0.0), result.fidelity)
-        rng = seeds.stream(inp.seed, "random_arrangement")
-        configs = random_configurations(inp.items, inp.table, rng, m=inp.options.m)
-        arrangement = Arrangement(inp.request, inp.table, configs[0].placements)
-        return Proposal(arrangement, configs, time.perf_counter() - t0)
+    def __post_init__(self) -> None:
+        self.standing_choice  # noqa: B018 - a bad standing policy is refused when declared
 
+    @property
+    def arrangement(self) -> ArrangementSource:
+        """The LLM's arrangement or a random one."""
+        return LLMArrangement() if self.uses_llm else RandomArrangement()
+
+    @property
+    def standing_choice(self) -> StandingChoice:
+        """The standing policy, as declared."""
+        return PolicyStanding(self.standing, self.best_of_all)
 
 
 @dataclass(frozen=True)
@@ -121,7 +214,7 @@ class GivenArrangement:
     positions and attempt counts; no LLM is asked and nothing is sampled."""
 
     base: Method
-    arrangement: Arrangement
+    given: Arrangement
     uses_llm: bool = False
 
     @property
@@ -135,19 +228,19 @@ class GivenArrangement:
         return f"{self.base.name} planning for a given arrangement"
 
     @property
-    def standing(self) -> Literal["utility", "uniform"]:
-        """The base method's standing policy."""
-        return self.base.standing
+    def arrangement(self) -> ArrangementSource:
+        """The given arrangement, as it is."""
+        return self
 
     @property
-    def best_of_all(self) -> bool:
-        """Whether the base method plans for every configuration (there is one here)."""
-        return self.base.best_of_all
+    def standing_choice(self) -> StandingChoice:
+        """The base method's standing positions."""
+        return self.base.standing_choice
 
     @property
     def manip_attempts(self) -> int:
         """Attempts per pick and place: the base method's."""
-        return getattr(self.base, "manip_attempts", BASELINE_MANIP_ATTEMPTS)
+        return self.base.manip_attempts
 
     def propose(self, inp: EpisodeInput) -> Proposal:
-        return Proposal(self.arrangement, (Configuration(self.arrangement.placements),), 0.0)
+        return Proposal(self.given, (Configuration(self.given.placements),), 0.0)

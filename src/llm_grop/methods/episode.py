@@ -13,10 +13,9 @@ from dataclasses import dataclass, replace
 from llm_grop import seeds
 from llm_grop.arrangement.diners import violations_at_table
 from llm_grop.execution import ExecutionPolicy, execute
-from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.methods.base import EpisodeInput, Method
 from llm_grop.planning.feasibility import FeasibilityModel, feasibility_profile
-from llm_grop.planning.grop import build_plan, choose
+from llm_grop.planning.grop import build_plan
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import GropOptions, PlanningContext
 from llm_grop.simulation.base import Simulator
@@ -57,7 +56,7 @@ def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | 
     """
     planned = plan_episode(method, inp, scene, model=model, planner=planner)
     return execute_episode(planned, inp, task=task, simulator=simulator, planner=planner,
-                           attempts=getattr(method, "manip_attempts", BASELINE_MANIP_ATTEMPTS),
+                           attempts=method.manip_attempts,
                            method=method.name, policy=policy)
 
 
@@ -66,14 +65,13 @@ def plan_episode(method: Method, inp: EpisodeInput, scene: Scene, *,
                  planner: GropOptions | None = None) -> PlannedEpisode:
     """The first half of :func:`run_episode`: ``method``'s arrangement and the task-motion
     plan for it in ``scene``, not executed."""
-    proposal = method.propose(inp)
+    proposal = method.arrangement.propose(inp)
     _say(inp, f"planning for {len(proposal.configurations)} configuration(s)")
     t0 = time.perf_counter()
     profile = model if isinstance(model, str) else "custom"
     belief = feasibility_profile(model) if isinstance(model, str) else model
     ctx = PlanningContext(scene, inp.items, belief, planner)
-    cand = choose(ctx, proposal.configurations, method.standing,
-                  seeds.stream(inp.seed, "standing"), method.best_of_all, proposal.fidelity)
+    cand = method.standing_choice.choose(ctx, proposal, seeds.stream(inp.seed, "standing"))
     plan = build_plan(ctx, cand, navigator(scene, planner), inp.seed,
                       len(proposal.configurations))
     planning_s = proposal.compute_time_s + time.perf_counter() - t0

@@ -22,20 +22,14 @@ LLM_GROP = ComposedMethod("llm-grop", "LLM arrangement, utility-optimal task-mot
                           uses_llm=True, standing="utility", best_of_all=True,
                           manip_attempts=LLM_GROP_MANIP_ATTEMPTS)
 
-_FIELDS = ("name", "description", "uses_llm", "standing", "best_of_all")
-
-
 def _check(name: str, obj: Any, origin: str) -> None:
-    missing = [f for f in _FIELDS if not hasattr(obj, f)]
-    if missing or not callable(getattr(obj, "propose", None)) or isinstance(obj, type):
-        raise BadInput(f"{origin}: {name!r} is not a method instance (it needs "
-                       f"{', '.join(_FIELDS)} and propose())", param="method")
+    if isinstance(obj, type) or not isinstance(obj, Method):
+        raise BadInput(f"{origin}: {name!r} is not a method instance (it needs a name, a "
+                       "description, an arrangement, a standing_choice and manip_attempts; "
+                       "see llm_grop.methods.base.Method)", param="method")
     if str(obj.name).strip().lower() != name:
         raise BadInput(f"{origin}: method registered as {name!r} is named "
                        f"{obj.name!r}; the two must agree", param="method")
-    if obj.standing not in ("utility", "uniform"):
-        raise BadInput(f"{origin}: method {name!r}: standing must be 'utility' or "
-                       f"'uniform', got {obj.standing!r}", param="method")
 
 
 METHODS: Registry[Method] = Registry(

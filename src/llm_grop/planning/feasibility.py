@@ -39,14 +39,25 @@ Floats = NDArray[np.float64]
 
 
 class FeasibilityModel(Protocol):
-    """Success probabilities of the robot's actions."""
+    """Success probabilities and expected durations of the robot's actions: what a
+    belief (a packaged profile, or a learned model of a user's) declares."""
 
     def navigation(self, clearance_m: ArrayLike) -> Floats:
         """Probability that navigating to goals with these clearances (metres) succeeds."""
         ...
 
     def manipulation(self, reach_m: ArrayLike, robot: Robot) -> Floats:
-        """Probability that a pick or place at these reach distances (metres) succeeds."""
+        """Probability that a pick at these reach distances (metres) succeeds."""
+        ...
+
+    def placing(self, reach_m: ArrayLike, robot: Robot) -> Floats:
+        """Probability that a place at these reach distances (metres) succeeds (a model
+        that does not tell picks and places apart returns :meth:`manipulation`'s)."""
+        ...
+
+    def action_times(self, robot: Robot) -> ActionTimes:
+        """The seconds it believes the robot's actions take (a model that states none
+        returns the robot's own, with no overhead)."""
         ...
 
 
@@ -65,6 +76,12 @@ class ParametricFeasibility(Curves):
         """Probability that a place at these reach distances (metres) succeeds."""
         return self.manipulation_p(reach_m, robot, place=True)
 
+    def action_times(self, robot: Robot) -> ActionTimes:
+        """The profile's times, the robot's own where it states none."""
+        return ActionTimes(robot.pick_time_s if self.pick_time_s is None else self.pick_time_s,
+                           robot.place_time_s if self.place_time_s is None
+                           else self.place_time_s, self.leg_overhead_s, self.failed_attempt_s)
+
 
 #: The model every planner and the simulator use unless given another.
 DEFAULT_FEASIBILITY = ParametricFeasibility()
@@ -82,14 +99,8 @@ class ActionTimes:
 
 
 def action_times(model: FeasibilityModel, robot: Robot) -> ActionTimes:
-    """The times ``model`` believes in, the robot's own where it states none (a plugin
-    model without time fields believes the robot's)."""
-    pick = getattr(model, "pick_time_s", None)
-    place = getattr(model, "place_time_s", None)
-    return ActionTimes(robot.pick_time_s if pick is None else pick,
-                       robot.place_time_s if place is None else place,
-                       float(getattr(model, "leg_overhead_s", 0.0)),
-                       float(getattr(model, "failed_attempt_s", 0.0)))
+    """The times ``model`` believes in (:meth:`FeasibilityModel.action_times`)."""
+    return model.action_times(robot)
 
 
 def feasibility_profile(name: str) -> ParametricFeasibility:
@@ -99,7 +110,6 @@ def feasibility_profile(name: str) -> ParametricFeasibility:
 
 
 def placing(model: FeasibilityModel, reach_m: ArrayLike, robot: Robot) -> Floats:
-    """Probability that a place at these reaches succeeds: the model's ``placing`` when it
-    has one, else its ``manipulation`` (a plugin model that does not tell them apart)."""
-    place = getattr(model, "placing", None)
-    return place(reach_m, robot) if place is not None else model.manipulation(reach_m, robot)
+    """Probability that a place at these reaches succeeds
+    (:meth:`FeasibilityModel.placing`)."""
+    return model.placing(reach_m, robot)

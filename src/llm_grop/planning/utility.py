@@ -40,6 +40,7 @@ from llm_grop.planning.standing import (
     pickup_pose,
     reach,
 )
+from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import Item, Placement
 from llm_grop.world.plan import StandingPose
 from llm_grop.world.scene import ObjectSource, Scene
@@ -63,20 +64,20 @@ class GropOptions:
             :attr:`~llm_grop.world.fidelity.Fidelity.infidelity_m`). 0 ignores fidelity.
     """
 
-    w: float = 40.0
+    w: float = DEFAULTS.weight
     spacing_m: float = 0.10
     standoffs_m: tuple[float, ...] = (0.05, 0.10, 0.15, 0.25)
     grid_resolution_m: float = 0.05
     alternatives: int = 3
     path_time_limit_s: float = 0.5
-    fidelity_w_s_per_cm: float = 1.0
+    fidelity_w_s_per_cm: float = DEFAULTS.fidelity_weight
 
     def __post_init__(self) -> None:
         if self.w < 0:
-            raise BadInput(f"must not be negative, got {self.w}", param="planner.w")
+            raise BadInput(f"must not be negative, got {self.w}", param="weight")
         if not self.fidelity_w_s_per_cm >= 0 or self.fidelity_w_s_per_cm == float("inf"):
             raise BadInput(f"must be a finite number >= 0 (seconds per centimetre), got "
-                           f"{self.fidelity_w_s_per_cm:g}", param="planner.fidelity_w_s_per_cm")
+                           f"{self.fidelity_w_s_per_cm:g}", param="fidelity_weight")
         if self.spacing_m <= 0 or not self.standoffs_m or min(self.standoffs_m) < 0:
             raise BadInput("planner: spacing_m must be positive and standoffs_m non-negative")
 

@@ -9,14 +9,23 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
+from llm_grop.settings import DEFAULTS, RunSettings, help_text
 from llm_grop.world.contract import ArrangementDoc, RelationDoc, RunDoc
 from llm_grop.world.datafile import problem_line
 from llm_grop.world.plan_doc import PlanJSON
 from llm_grop.world.request import MAX_DINERS, MAX_REQUEST_CHARS
 from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
 
-#: The largest seed: a 32-bit generator seed, as the CLI takes.
-MAX_SEED = 2**31 - 1
+
+def setting(name: str, base: Any, *limits: Any) -> Any:
+    """The settings record's field ``name`` as a JSON body's type: ``base`` (a strict
+    pydantic type) with the record's bounds and the server's own ``limits`` on top."""
+    return Annotated[(base, *RunSettings.model_fields[name].metadata, *limits)]
+
+
+def described(name: str, **more: Any) -> Any:
+    """A JSON body's field with the settings record's default and help for ``name``."""
+    return Field(getattr(DEFAULTS, name), description=help_text(name), **more)
 
 
 def _no_path(text: str) -> str:
@@ -68,11 +77,9 @@ class ArrangeBody(_Body):
                                         "dinner plate'; they win over the LLM")
     llm: Name | None = Field(None, description="one of the server's backends (GET /v1/info); "
                                                "default: its first")
-    seed: Annotated[StrictInt, Field(ge=0, le=MAX_SEED)] = 0
-    m: Annotated[StrictInt, Field(ge=1, le=100)] = Field(25, description="configurations to "
-                                                                        "sample (M)")
-    guess: StrictBool = Field(True, description="false: refuse a request the LLM would have "
-                                                "to complete")
+    seed: setting("seed", StrictInt) = described("seed")
+    m: setting("m", StrictInt, Field(le=100)) = described("m")
+    guess: StrictBool = described("guess")
 
 
 class ChairBody(_Body):
@@ -104,18 +111,18 @@ class PlanBody(_Body):
                                          "sampled for the seed)")
     robot: tuple[Coordinate, Coordinate, Annotated[float, Field(allow_inf_nan=False)]] | None \
         = Field(None, description="the robot's pose [x, y, theta] in the room frame")
-    method: Name = "llm-grop"
-    feasibility: Name = Field("default", description="the planner's feasibility profile")
+    method: Name = described("method")
+    feasibility: Name = described("feasibility")
     llm: Name | None = None
-    seed: Annotated[StrictInt, Field(ge=0, le=MAX_SEED)] = 0
-    m: Annotated[StrictInt, Field(ge=1, le=100)] = 25
-    guess: StrictBool = True
+    seed: setting("seed", StrictInt) = described("seed")
+    m: setting("m", StrictInt, Field(le=100)) = described("m")
+    guess: StrictBool = described("guess")
 
 
 class RunBody(PlanBody):
     """``POST /v1/runs``: plan and execute in a simulator, as a job."""
 
-    simulator: Name = Field("kinematic2d", description="kinematic2d or mujoco")
+    simulator: Name = described("simulator")
     video: StrictBool = Field(True, description="mujoco: record a video of the episode")
 
 

@@ -11,11 +11,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from llm_grop.assembly import call_log
 from llm_grop.errors import BadInput
 from llm_grop.llm.base import LLM, CallLog
 from llm_grop.llm.registry import create_llm
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.models import ArrangeBody, PlanBody, RunBody
+from llm_grop.settings import DEFAULTS, RunSettings
 from llm_grop.world.table import Table
 
 Files = dict[str, tuple[str, bytes]]
@@ -39,14 +41,12 @@ class Backends:
             if self.config.llm_threads is not None:
                 options = replace(options, n_threads=self.config.llm_threads)
             self._made[backend.name] = create_llm(backend.name, options)
-        return CallLog(self._made[backend.name], None)
+        return call_log(self._made[backend.name])
 
     def close(self) -> None:
         """Release every backend."""
         for llm in self._made.values():
-            close = getattr(llm, "close", None)
-            if close is not None:
-                close()
+            llm.close()
         self._made.clear()
 
 
@@ -62,10 +62,10 @@ def perform(kind: str, body: dict[str, Any], config: ServiceConfig, llms: Backen
     return _run(RunBody.model_validate(body), config, llms, on_event)
 
 
-def _options(body: ArrangeBody | PlanBody) -> Any:
-    from llm_grop.arrangement.pipeline import ArrangeOptions
-
-    return ArrangeOptions(m=body.m, preferences=tuple(body.preferences))
+def _settings(body: ArrangeBody | PlanBody, **more: Any) -> RunSettings:
+    """The settings record of a body's fields (the LLM is the server's, chosen apart)."""
+    return RunSettings.make(seed=body.seed, m=body.m, guess=body.guess,
+                            preferences=tuple(body.preferences), **more)
 
 
 def _table(body: ArrangeBody) -> Table:
@@ -95,9 +95,8 @@ def _arrange(body: ArrangeBody, config: ServiceConfig, llms: Backends,
     from llm_grop.api import arrange
     from llm_grop.world.serialize import arrangement_to_dict
 
-    result = arrange(body.request, llm=llms.log(body.llm), table=_table(body),
-                     seed=body.seed, options=_options(body), on_event=on_event,
-                     guess=body.guess)
+    result = arrange(body.request, _settings(body), llm=llms.log(body.llm),
+                     table=_table(body), on_event=on_event)
     _check_size(len(result.arrangement.placements), config)
     return ({"arrangement": arrangement_to_dict(result.arrangement)},
             _table_pictures(result.arrangement, config.scratch))
@@ -133,7 +132,8 @@ def _scene(body: PlanBody) -> Any:
 
 
 def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
-             on_event: Callable[[str], None], check: Callable[..., None] | None = None) -> Any:
+             on_event: Callable[[str], None], check: Callable[..., None] | None = None,
+             simulator: str = DEFAULTS.simulator) -> Any:
     from llm_grop.api import plan
     from llm_grop.world.serialize import arrangement_from_dict
 
@@ -143,12 +143,12 @@ def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
         if body.arrangement is not None else None
     if arrangement is not None:
         _check_size(len(arrangement.placements), config)
-    planned = plan(body.request, task=body.task, arrangement=arrangement,
-                   method=body.method, scene=_scene(body),
+    settings = _settings(body, task=body.task, method=body.method,
+                         feasibility=body.feasibility,
+                         simulator=simulator)
+    planned = plan(body.request, settings, arrangement=arrangement, scene=_scene(body),
                    table=body.table.table() if body.table is not None else None,
-                   seed=body.seed, llm=llms.log(body.llm), options=_options(body),
-                   feasibility=body.feasibility, on_event=on_event, guess=body.guess,
-                   check=check)
+                   llm=llms.log(body.llm), on_event=on_event, check=check)
     _check_size(len(planned.input.items), config)
     return planned
 
@@ -171,32 +171,28 @@ def _run(body: RunBody, config: ServiceConfig, llms: Backends,
          on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
     from llm_grop.api import execute
     from llm_grop.render.room import draw_run
-    from llm_grop.simulation.registry import SIMULATORS, create_simulator
+    from llm_grop.simulation.registry import create_simulator, simulator_class
     from llm_grop.world.run_json import run_to_dict
 
-    three_d = SIMULATORS.key(body.simulator) == "mujoco"
+    renders = simulator_class(body.simulator).supports_pictures
     with tempfile.TemporaryDirectory(prefix="run-", dir=config.scratch) as tmp:
         video = Path(tmp) / "episode.mp4"
-        if three_d:
-            from llm_grop.simulation.mujoco.render import check_rendering
-            from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
-
-            check_rendering()
-            sim: Any = MujocoSimulator(MujocoOptions(
-                video_path=str(video) if body.video else None))
-        else:
-            sim = create_simulator(body.simulator)
-        planned = _planned(body, config, llms, on_event, check=getattr(sim, "check", None))
+        films = body.video and simulator_class(body.simulator).supports_video
+        sim = create_simulator(body.simulator, {"video_path": str(video)} if films else None)
+        if renders:
+            sim.check_rendering()
+        planned = _planned(body, config, llms, on_event, check=sim.check,
+                           simulator=body.simulator)
         result = execute(planned, simulator=sim)
         files: Files = _table_pictures(result.final, config.scratch) | {
             "room.png": (PNG, _png(lambda f: draw_run(result, f), config.scratch))}
-        if three_d:
+        if renders:
             from llm_grop.render.raster import save_rgb_png
 
             for view in ("table", "room"):
                 image = sim.picture(view)
                 files[f"render_{view}.png"] = (PNG, _png(lambda f, i=image: save_rgb_png(i, f),
                                                          config.scratch))
-            if body.video and video.exists():
-                files["episode.mp4"] = ("video/mp4", video.read_bytes())
+        if films and video.exists():
+            files["episode.mp4"] = ("video/mp4", video.read_bytes())
     return {"run": run_to_dict(result)}, files

@@ -22,6 +22,7 @@ from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError
 from llm_grop.processes import ctrl_c_ignored_by_children, die_with_parent
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.jobs import Job, JobStore
+from llm_grop.settings import in_words
 
 log = logging.getLogger(__name__)
 
@@ -31,10 +32,6 @@ IDLE_POLL_S = 0.05
 SUPERVISE_S = 0.25
 #: Seconds between the supervisor's prunings of ended jobs (``ServiceConfig.keep_s``).
 PRUNE_S = 3600.0
-
-
-#: The Python API's parameters that the JSON bodies name otherwise.
-_FIELDS = {"options.preferences": "preferences"}
 
 
 def status_of(exc: BaseException) -> tuple[int, str]:
@@ -48,8 +45,8 @@ def status_of(exc: BaseException) -> tuple[int, str]:
     if isinstance(exc, LLMError):
         return 503, "llm: the server's LLM backend could not answer this request; its log " \
                     "says why"
-    if isinstance(exc, BadInput) and exc.param in _FIELDS:
-        return 422, str(BadInput(exc.detail, param=_FIELDS[exc.param], value=exc.value))
+    if isinstance(exc, BadInput):
+        return 422, in_words(exc, "json")
     if isinstance(exc, LLMGropError):
         return 422, str(exc)
     return 500, f"internal error: {type(exc).__name__} (the server's log has the details)"

@@ -14,11 +14,14 @@ in :mod:`llm_grop.simulation.registry`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Protocol
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
+from dataclasses import fields
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
+from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, ObjectState, Point
@@ -88,14 +91,87 @@ class Session(Protocol):
         ...
 
 
-class Simulator(Protocol):
-    """Offers sessions. ``name`` is the name it is registered under (it goes into the run
-    JSON); all randomness comes from the ``rng`` given to :meth:`session`."""
+class Simulator(ABC):
+    """Offers sessions. A simulator, shipped or a plugin's, subclasses this and declares,
+    as class attributes, what users may set and what it can do (the way simonw/llm's
+    models declare ``Options`` and ``supports_schema``); callers read the declaration and
+    never probe for a method:
 
-    name: str
+    - ``name``: the name it is registered under (it goes into the run JSON);
+    - ``Options``: a frozen dataclass of its options, whose instance the constructor
+      takes; the front doors check a user's values against it (``--sim-option
+      timestep_s=0.002``, ``sim_options`` in a sweep file) with pydantic, unknown keys
+      refused (:func:`options_of`);
+    - ``supports_pictures``: :meth:`picture` renders the last episode (and
+      :meth:`check_rendering` says before any work whether it can);
+    - ``supports_video``: its options' ``video_path`` records each episode as an MP4;
+    - ``cameras``: the named cameras its pictures and videos may be taken from (its
+      options' ``camera``).
 
+    All randomness comes from the ``rng`` given to :meth:`session`.
+    """
+
+    name: ClassVar[str]
+    Options: ClassVar[type]
+    supports_pictures: ClassVar[bool] = False
+    supports_video: ClassVar[bool] = False
+    cameras: ClassVar[tuple[str, ...]] = ()
+
+    @abstractmethod
     def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
                 replan: PathPlanner) -> Session:
         """A new episode in ``scene`` (its chairs are the true ones) with ``items`` at
         their starts."""
-        ...
+
+    def check(self, scene: Scene, items: Sequence[Item] = ()) -> None:
+        """:class:`~llm_grop.errors.BadInput` when this scene or these objects cannot be
+        simulated; called before planning, so bad input costs no work. The default accepts
+        every scene."""
+        return None
+
+    def check_rendering(self) -> None:
+        """:class:`~llm_grop.errors.BadInput` when :meth:`picture` cannot work here (a
+        missing library), said before any work."""
+        if not self.supports_pictures:
+            raise BadInput(f"simulator {self.name!r} makes no pictures", param="simulator")
+
+    def picture(self, view: str = "table", size: tuple[int, int] | None = None,
+                camera: str | None = None) -> np.ndarray:
+        """An RGB image (``height x width x 3``, ``uint8``) of the last episode as it
+        stands: its ``table`` or the ``room``, from ``camera`` (one of :attr:`cameras`;
+        ``None``: the view's default), ``size`` (width, height) pixels."""
+        raise BadInput(f"simulator {self.name!r} makes no pictures", param="simulator")
+
+
+def option_names(simulator: type[Simulator]) -> tuple[str, ...]:
+    """The options ``simulator`` declares."""
+    return tuple(f.name for f in fields(simulator.Options))
+
+
+def options_of(simulator: type[Simulator], given: Mapping[str, Any]) -> Any:
+    """``given`` (a user's values by option name) as ``simulator``'s declared options,
+    each checked against its type by pydantic: the first problem is one
+    :class:`~llm_grop.errors.BadInput` naming ``sim_options.KEY``."""
+    from pydantic import ConfigDict, TypeAdapter, ValidationError
+
+    from llm_grop.settings import first_reason
+
+    unknown = [k for k in given if k not in option_names(simulator)]
+    if unknown:
+        raise BadInput(f"simulator {simulator.name!r} has no option {unknown[0]!r} (its "
+                       f"options: {', '.join(option_names(simulator))})",
+                       param="sim_options")
+    adapter = TypeAdapter(simulator.Options, config=None if _configured(simulator.Options)
+                          else ConfigDict(arbitrary_types_allowed=True))
+    try:
+        return adapter.validate_python(dict(given))
+    except ValidationError as exc:
+        error = exc.errors(include_url=False)[0]
+        key = ".".join(str(k) for k in error.get("loc", ()))
+        raise BadInput(first_reason(error), param=f"sim_options.{key}",
+                       value=error.get("input")) from None
+
+
+def _configured(options: type) -> bool:
+    """Whether the options dataclass carries its own pydantic configuration."""
+    return "__pydantic_config__" in vars(options)

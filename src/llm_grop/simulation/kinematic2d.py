@@ -21,14 +21,15 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+from pydantic import ConfigDict, SkipValidation
 
 from llm_grop.errors import BadInput
 from llm_grop.geometry.motion import arrival_error, leg_duration_s, path_length_m, path_prefix
 from llm_grop.geometry.obstacles import Obstacles
-from llm_grop.simulation.base import PathPlanner
+from llm_grop.simulation.base import PathPlanner, Simulator
 from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
@@ -52,6 +53,9 @@ class Kinematic2DOptions:
 
     Attributes:
         outcomes: how often navigation, picks and places really succeed.
+        truth: a packaged feasibility profile whose curves the outcomes are drawn from
+            instead (``mujoco``: what the 3D world was measured to do; ``None``:
+            ``outcomes``).
         nav_noise_std_m: standard deviation of the arrival position, per axis, metres.
         heading_noise_std_rad: standard deviation of the arrival heading, radians.
         place_noise_std_m: standard deviation of a placed object's position, metres.
@@ -71,7 +75,12 @@ class Kinematic2DOptions:
     place_failures: tuple[tuple[Reason, float], ...] = (
         ("contact", 0.5), ("slid", 0.35), ("tipped", 0.1), ("fell", 0.05))
     slide_m: tuple[float, float] = (0.04, 0.10)
-    outcomes: Outcomes = field(default_factory=ParametricOutcomes)
+    outcomes: SkipValidation[Outcomes] = field(default_factory=ParametricOutcomes)
+    truth: str | None = None
+
+    # The front doors check a user's options with pydantic (unknown keys refused; the
+    # outcomes, an object, are given in Python only).
+    __pydantic_config__ = ConfigDict(extra="forbid", arbitrary_types_allowed=True)
 
     def __post_init__(self) -> None:
         kinds = ("contact", "slid", "tipped", "fell")
@@ -86,13 +95,18 @@ class Kinematic2DOptions:
             raise BadInput("place_failures: needs at least one positive weight")
 
 
-class Kinematic2D:
-    """The 2D kinematic simulator (registered as ``kinematic2d``)."""
+class Kinematic2D(Simulator):
+    """The 2D kinematic simulator (registered as ``kinematic2d``): no pictures of its own
+    (the room's drawing stands in for them)."""
 
     name = "kinematic2d"
+    Options = Kinematic2DOptions
 
     def __init__(self, options: Kinematic2DOptions | None = None) -> None:
-        self.options = options or Kinematic2DOptions()
+        options = options or Kinematic2DOptions()
+        if options.truth is not None:
+            options = replace(options, outcomes=ParametricOutcomes.from_profile(options.truth))
+        self.options = options
 
     def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
                 replan: PathPlanner) -> Kinematic2DSession:

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, get_args
 
+from pydantic import ConfigDict
+
 from llm_grop.errors import BadInput
 
 #: How the hand holds an object: ``fix``, a weld that attaches only on a squeezing grip
@@ -127,6 +129,9 @@ class MujocoOptions:
     video_frame_s: float = 0.2
     video_fps: int = 25
     camera: Camera | None = None
+
+    # The front doors check a user's options with pydantic; unknown keys are refused.
+    __pydantic_config__ = ConfigDict(extra="forbid")
 
     def __post_init__(self) -> None:
         if self.grasp not in GRASPS:

@@ -19,9 +19,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from llm_grop.errors import BadInput
-from llm_grop.simulation.base import PathPlanner
+from llm_grop.simulation.base import PathPlanner, Simulator
 from llm_grop.simulation.mujoco.arm import ArmIK
-from llm_grop.simulation.mujoco.options import MujocoOptions
+from llm_grop.simulation.mujoco.options import CAMERAS, MujocoOptions
 from llm_grop.simulation.mujoco.render import VideoRecorder, View, check_rendering, picture
 from llm_grop.simulation.mujoco.session import MujocoSession
 from llm_grop.simulation.mujoco.tableware import tableware
@@ -33,13 +33,17 @@ from llm_grop.world.scene import Scene
 __all__ = ["MujocoOptions", "MujocoSimulator"]
 
 
-class MujocoSimulator:
+class MujocoSimulator(Simulator):
     """Runs episodes in MuJoCo. :attr:`world` holds the last episode's world and
     :meth:`picture` renders it from a named camera (``options.camera`` chooses the one of
     the table render and the video). ``on_frame`` is called with the world every
     ``options.video_frame_s`` simulated seconds (a video recorder, a viewer)."""
 
     name = "mujoco"
+    Options = MujocoOptions
+    supports_pictures = True
+    supports_video = True
+    cameras = CAMERAS
 
     def __init__(self, options: MujocoOptions | None = None, *,
                  on_frame: Callable[[World], None] | None = None) -> None:

@@ -1,0 +1,172 @@
+"""What a :class:`~llm_grop.settings.RunSettings` record builds: the arrangement's, the
+planner's, the LLM backend's and the executive's option records, the simulator and the
+LLM's call log. Every front door (the API, the bench's trials, the service) builds them
+here, so one record means one run wherever it comes from.
+
+The component records (:class:`~llm_grop.arrangement.pipeline.ArrangeOptions`,
+:class:`~llm_grop.planning.utility.GropOptions`, :class:`~llm_grop.llm.base.BackendOptions`,
+:class:`~llm_grop.execution.ExecutionPolicy`) hold more than the record: advanced
+settings (a stated relation's tolerance, the planner's standoffs, the executive's place
+tolerances) that a caller of the Python API may give as such a record, its ``base``.
+What the settings record holds always comes from the record.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from os import PathLike
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from llm_grop.arrangement.pipeline import ArrangeOptions
+from llm_grop.execution import ExecutionPolicy
+from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
+from llm_grop.llm.cache import LLMCache
+from llm_grop.llm.registry import BACKENDS, create_llm
+from llm_grop.planning.utility import GropOptions
+from llm_grop.settings import DEFAULTS, RunSettings
+
+if TYPE_CHECKING:
+    from llm_grop.simulation.base import Simulator
+
+
+@dataclass(frozen=True)
+class Bases:
+    """Component records a caller gave whole (``None``: the defaults), whose fields the
+    settings record does not hold."""
+
+    arrange: ArrangeOptions | None = None
+    planner: GropOptions | None = None
+    backend: BackendOptions | None = None
+    execution: ExecutionPolicy | None = None
+
+
+#: The component record a caller may give as a keyword, and the settings each field of
+#: it sets (``None``: the record's own, kept as the base's).
+_LIFTED: dict[str, tuple[type, dict[str, str]]] = {
+    "options": (ArrangeOptions, {"m": "m", "max_attempts": "attempts", "notes": "notes",
+                                 "preferences": "preferences"}),
+    "planner": (GropOptions, {"w": "weight", "fidelity_w_s_per_cm": "fidelity_weight"}),
+    "llm_options": (BackendOptions, {"model": "model", "base_url": "base_url",
+                                     "timeout_s": "timeout_s", "max_retries": "retries",
+                                     "max_answer_bytes": "max_answer_bytes",
+                                     "replay_path": "replay"}),
+    "execution": (ExecutionPolicy, {"nav_attempts": "nav_attempts",
+                                    "manip_attempts": "manip_attempts"}),
+}
+#: The component record's keyword -> the field of :class:`Bases` it fills.
+_BASE_FIELD = {"options": "arrange", "planner": "planner", "llm_options": "backend",
+               "execution": "execution"}
+#: Sampling settings: :class:`SamplingParams` field -> the settings record's field.
+_SAMPLING = {"temperature": "temperature", "top_p": "top_p", "max_tokens": "max_tokens",
+             "frequency_penalty": "frequency_penalty", "presence_penalty": "presence_penalty"}
+
+
+def settle(settings: RunSettings | None, given: dict[str, Any]) -> tuple[RunSettings, Bases]:
+    """The record ``settings`` (``None``: the defaults) with ``given`` on top: fields of
+    the record by name, or a component record whole (``options``, ``planner``,
+    ``llm_options``, ``execution``), whose fields the record holds are lifted into it and
+    whose others are kept as :class:`Bases`. A field given by name wins over a component
+    record's."""
+    base = settings or DEFAULTS
+    changes: dict[str, Any] = {}
+    bases: dict[str, Any] = {}
+    for keyword in [k for k in given if k in _LIFTED]:
+        record = given.pop(keyword)
+        if record is None:
+            continue
+        kind, lifted = _LIFTED[keyword]
+        if not isinstance(record, kind):
+            from llm_grop.errors import BadInput
+
+            raise BadInput(f"expected a {kind.__name__}, got {type(record).__name__}",
+                           param=keyword)
+        default = kind()
+        for attr, name in lifted.items():
+            value = getattr(record, attr)
+            if value != getattr(default, attr):
+                changes[name] = value
+        if keyword == "options":
+            changes |= _from_arrange_options(record)
+        bases[_BASE_FIELD[keyword]] = record
+    return base.with_values(**(changes | given)), Bases(**bases)
+
+
+def _from_arrange_options(options: ArrangeOptions) -> dict[str, Any]:
+    """The settings an :class:`ArrangeOptions` holds besides its lifted fields: its
+    sampling and whether it leaves the examples out."""
+    default = SamplingParams()
+    out = {name: getattr(options.params, attr) for attr, name in _SAMPLING.items()
+           if getattr(options.params, attr) != getattr(default, attr)}
+    if options.examples == "":
+        out["zero_shot"] = True
+    return out
+
+
+def arrange_options(s: RunSettings, base: ArrangeOptions | None = None) -> ArrangeOptions:
+    """The arrangement's options the record ``s`` sets, on ``base``'s others; the
+    preferences file is read here (a bad one is :class:`BadInput` naming it)."""
+    from llm_grop.arrangement.preferences import load_preference_file
+
+    base = base or ArrangeOptions()
+    pool = load_preference_file(s.preferences_file) if s.preferences_file is not None \
+        else base.preference_pool
+    examples = "" if s.zero_shot else (base.examples if base.examples != "" else None)
+    return replace(base, m=s.m, max_attempts=s.attempts, examples=examples, notes=s.notes,
+                   params=sampling(s), preferences=s.preferences, preference_pool=pool)
+
+
+def sampling(s: RunSettings) -> SamplingParams:
+    """The decoding settings of every LLM call the record ``s`` makes."""
+    return SamplingParams(**{attr: getattr(s, name) for attr, name in _SAMPLING.items()})
+
+
+def planner_options(s: RunSettings, base: GropOptions | None = None) -> GropOptions:
+    """The task-motion planner's options the record ``s`` sets, on ``base``'s others."""
+    return replace(base or GropOptions(), w=s.weight, fidelity_w_s_per_cm=s.fidelity_weight)
+
+
+def backend_options(s: RunSettings, base: BackendOptions | None = None) -> BackendOptions:
+    """How to build the record's LLM backend, on ``base``'s others (key, threads)."""
+    return replace(base or BackendOptions(), model=s.model, base_url=s.base_url,
+                   timeout_s=s.timeout_s, max_retries=s.retries,
+                   max_answer_bytes=s.max_answer_bytes,
+                   replay_path=Path(s.replay) if s.replay is not None else None)
+
+
+def execution_policy(s: RunSettings, base: ExecutionPolicy | None = None) -> ExecutionPolicy:
+    """The executive's policy the record ``s`` sets, on ``base``'s tolerances."""
+    return replace(base or ExecutionPolicy(), nav_attempts=s.nav_attempts,
+                   manip_attempts=s.manip_attempts)
+
+
+def call_log(llm: LLM, *, record: str | PathLike[str] | None = None,
+             cache: str | PathLike[str] | None = None) -> CallLog:
+    """A fresh log of ``llm``'s calls: appended to the JSONL file ``record``, answered
+    from the LLM cache in directory ``cache`` where asked before (``None``: neither).
+    The one way the API, the bench's trials and the service log an LLM."""
+    return CallLog(llm, Path(record) if record is not None else None,
+                   cache=LLMCache(cache) if cache is not None else None)
+
+
+def make_backend(s: RunSettings, base: BackendOptions | None = None) -> LLM:
+    """The record's LLM backend, built (a model is loaded) now."""
+    return create_llm(s.llm, backend_options(s, base))
+
+
+def check_backend(s: RunSettings) -> None:
+    """:class:`~llm_grop.errors.BadInput` for a backend the record ``s`` cannot use, found
+    before any work: an unknown name, or ``replay`` without its file."""
+    from llm_grop.errors import BadInput
+
+    if BACKENDS.key(s.llm) == "replay" and s.replay is None:
+        raise BadInput("needs replay=FILE, a JSONL file of recorded calls", param="llm",
+                       value="replay")
+
+
+def make_simulator(s: RunSettings) -> Simulator:
+    """The simulator the record ``s`` names, with its options."""
+    from llm_grop.simulation.registry import create_simulator
+
+    return create_simulator(s.simulator, dict(s.sim_options), grasp=s.grasp, truth=s.truth)
+

@@ -1,0 +1,442 @@
+"""The one settings record of a run: every option that shapes it, written once.
+
+:class:`RunSettings` holds what a run is given besides its request: the paper's task or a
+request's objects, the method, the scene, chairs and table, the seed, the arrangement's
+options (M, Template 1's prompts, preferences), the planner's weights and belief, the
+simulator, the LLM and its sampling, the executive's attempt counts and the LLM cache.
+Each field's default, unit, bounds and help text are written here and nowhere else; the
+front doors are views of it:
+
+- the Python API (:func:`llm_grop.api.run` and friends) takes a record, or keyword
+  overrides named as its fields (``m=10``);
+- the command line's flags are generated from the fields (:mod:`llm_grop.cli.settings`);
+- a sweep file's keys and the service's JSON bodies name the same fields;
+- a bench's ``experiment.json`` and trial rows use the same names.
+
+A bad value is one :class:`~llm_grop.errors.BadInput` naming the field (``param``); each
+front door words that name its own way through :func:`label` (``--configurations``,
+``m:`` in a sweep file, ``"m"`` in JSON, ``m=`` in Python), from the field's metadata
+here, not from a table kept by hand.
+
+This module imports nothing from the package but :mod:`llm_grop.errors`, so every layer
+may read its defaults (:data:`DEFAULTS`).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PlainSerializer,
+    ValidationError,
+    WithJsonSchema,
+)
+
+from llm_grop.errors import BadInput
+
+#: The front doors a setting comes through; each names a field its own way.
+Interface = Literal["python", "cli", "sweep", "json"]
+
+#: The largest seed: a 32-bit generator seed.
+MAX_SEED = 2**31 - 1
+
+
+@dataclass(frozen=True)
+class Door:
+    """How one front door spells a setting, where it differs from the field's name.
+
+    ``cli``: the flag (``--configurations``; ``None``: ``--`` and the name with ``-`` for
+    ``_``), ``short``: a one-letter alias (``-m``), ``negate``: a flag that sets a boolean
+    to false (``--no-guess`` for ``guess``), ``sweep``: a sweep file's key path
+    (``llm.backend``), ``json``: the service's JSON field, ``metavar``: the flag's
+    placeholder, ``path``: the value names a ``file`` or a ``dir``, ``cli_help``: the
+    flag's help where the record's own words name Python's values.
+    """
+
+    cli: str | None = None
+    short: str | None = None
+    negate: str | None = None
+    sweep: str | None = None
+    json: str | None = None
+    metavar: str | None = None
+    path: Literal["file", "dir"] | None = None
+    cli_help: str | None = None
+
+
+def setting(default: Any, help: str, *, group: str, door: Door | None = None,
+            identity: bool = True, **bounds: Any) -> Any:
+    """A field of :class:`RunSettings`: its default, help (units included), the group of
+    options it belongs to (``llm``, ``plan``, ``sim``, ...), how front doors spell it
+    (:class:`Door`), whether it is part of an experiment's identity, and pydantic bounds
+    (``ge``, ``le``, ``min_length``)."""
+    meta: dict[str, Any] = {"group": group, "identity": identity}
+    if door is not None:
+        # As plain data, so that the record's JSON Schema carries it too.
+        meta["door"] = {k: v for k, v in asdict(door).items() if v is not None}
+    return Field(default, description=help, json_schema_extra=meta, **bounds)
+
+
+def _frozen(value: Any) -> Any:
+    """``value`` with its lists as tuples, so that a record holding it can be hashed."""
+    if isinstance(value, list | tuple):
+        return tuple(_frozen(v) for v in value)
+    if isinstance(value, Mapping):
+        return tuple(sorted((str(k), _frozen(v)) for k, v in value.items()))
+    return value
+
+
+def _pairs(value: Any) -> Any:
+    """A mapping of options (or ``KEY=VALUE`` texts, or pairs) as sorted ``(key, value)``
+    pairs; a ``KEY=VALUE`` text's value is read as YAML (``0.002``, ``true``, ``[1, 2]``)."""
+    if isinstance(value, Mapping):
+        return _frozen(value)
+    if not isinstance(value, list | tuple):
+        return value
+    pairs: dict[str, Any] = {}
+    for entry in value:
+        if isinstance(entry, str):
+            key, eq, text = entry.partition("=")
+            if not eq or not key.strip():
+                raise ValueError(f"expected KEY=VALUE, got {entry!r}")
+            import yaml
+
+            try:
+                pairs[key.strip()] = yaml.safe_load(text)
+            except yaml.YAMLError:
+                raise ValueError(f"{key.strip()}: {text!r} is not a value") from None
+        elif isinstance(entry, list | tuple) and len(entry) == 2:
+            pairs[str(entry[0])] = entry[1]
+        else:
+            return value
+    return _frozen(pairs)
+
+
+class RunSettings(BaseModel):
+    """Everything that shapes one run (units in each field's help). Immutable: build one
+    with the constructor (or :meth:`make` from a mapping) and change a copy with
+    :meth:`with_values`; a bad value is :class:`BadInput` naming its field."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", validate_default=False,
+                              allow_inf_nan=False)
+
+    # What to set
+    task: int | None = setting(
+        None, "Use the objects of the paper's Table I task N.", group="what", ge=1)
+    method: str = setting(
+        "llm-grop", "tpra, latp, grop, llm-grop, or a plugin's (see `llm-grop plugins`).",
+        group="what", min_length=1)
+    seed: int = setting(
+        0, "Seed for the scene's chairs, the LLM, the sampler, the plan and execution.",
+        group="what", ge=0, le=MAX_SEED)
+    task_files: tuple[str, ...] = setting(
+        (), "Extra tasks (YAML, like the packaged tasks.yaml); repeatable.", group="what",
+        door=Door(cli="--task-file", path="file"))
+    catalog_files: tuple[str, ...] = setting(
+        (), "An extra object catalog file (repeatable).", group="llm",
+        door=Door(cli="--catalog", path="file"))
+
+    # Where
+    scene: str | None = setting(
+        None, "Dining-room scene YAML (default: the packaged dining room).", group="room",
+        door=Door(path="file"))
+    chairs: int | None = setting(
+        None, "Chairs to sample near the table [default: the scene's own, else 1].",
+        group="room", ge=0)
+    table: str | None = setting(
+        None, "The target table's top: WxD such as 120x80cm, 1.2x0.8m or 1200x800mm (a bare "
+              "number is metres: 0.9x0.6), or round:D, a round top of diameter D such as "
+              "round:120cm; each side 0.2 to 10 m [default: arrange 0.9x0.6 m; run and "
+              "bench the scene's].", group="room", door=Door(metavar="WxD|round:D"))
+
+    # The arrangement (paper §III-A, §III-B)
+    m: int = setting(
+        25, "Configurations to sample (M).", group="llm", ge=1,
+        door=Door(cli="--configurations", short="-m"))
+    attempts: int = setting(
+        3, "Template 1 prompts before keeping the largest consistent subset.", group="llm",
+        ge=1)
+    zero_shot: bool = setting(False, "Leave the paper's few-shot examples out.", group="llm")
+    notes: str = setting("", "Text for Template 1's [notes] slot.", group="llm",
+                         max_length=10_000)
+    preferences: tuple[str, ...] = setting(
+        (), "A relation you want, e.g. 'the dinner fork to the left of the dinner plate'; "
+            "it wins over the LLM (repeatable).", group="llm",
+        door=Door(cli="--prefer", metavar="SENTENCE", sweep="prefer"))
+    preferences_file: str | None = setting(
+        None, "YAML file `preferences: [sentences]`; those whose objects are all requested "
+              "apply.", group="llm",
+        door=Door(cli="--preferences", sweep="preferences", path="file"))
+    guess: bool = setting(
+        True, "Refuse a request the LLM would have to complete: objects it does not name "
+              "(a meal, 'coffee'), or how many.", group="guess",
+        door=Door(negate="--no-guess"))
+
+    # The task-motion planner (paper §III-C)
+    weight: float = setting(
+        40.0, "GROP's utility weight w (seconds per unit of success probability).",
+        group="plan", ge=0, door=Door(cli="--weight"))
+    fidelity_weight: float = setting(
+        1.0, "Seconds of GROP's utility that one centimetre of infidelity costs (stated gaps "
+             "missed, the setting's shift); 0 ignores fidelity.", group="plan", ge=0)
+    feasibility: str = setting(
+        "default", "The planner's feasibility profile: default (assumed) or mujoco (fitted "
+                   "in 3D).", group="plan", min_length=1)
+
+    # Execution
+    simulator: str = setting(
+        "kinematic2d", "The simulator that executes the plan (see `llm-grop plugins`).",
+        group="sim", min_length=1)
+    sim_options: Annotated[tuple[tuple[str, Any], ...], BeforeValidator(_pairs),
+                           PlainSerializer(dict), WithJsonSchema({"type": "object"})] = setting(
+        (), "An option of the simulator, KEY=VALUE (a YAML value), as its Options declare "
+            "them (`llm-grop plugins` lists them), e.g. timestep_s=0.002; repeatable.",
+        group="sim", door=Door(cli="--sim-option", metavar="KEY=VALUE"))
+    grasp: Literal["fix", "friction"] = setting(
+        "fix", "--simulator mujoco: how the hand holds. fix: a weld that attaches only when "
+               "both pads squeeze the object (Gazebo's grasp-fix); friction: contact "
+               "friction alone (the README lists what it can carry).", group="sim")
+    truth: str | None = setting(
+        None, "--simulator kinematic2d: draw outcomes and durations from this feasibility "
+              "profile (mujoco: what the 3D world was measured to do) [default: the 2D "
+              "simulator's own, the default profile's curves].", group="sim",
+        door=Door(metavar="PROFILE"))
+    nav_attempts: int = setting(
+        3, "Attempts per navigation goal before the next fallback standing position.",
+        group="sim", ge=1)
+    manip_attempts: int | None = setting(
+        None, "Attempts per pick and per place of each object, re-grasps included "
+              "[default: the method's: 20 for llm-grop, 10 for the others, as the authors "
+              "ran them].", group="sim", ge=1)
+
+    # The LLM
+    llm: str = setting(
+        "embedded", "LLM backend: embedded, openai, replay, or a plugin's (see `llm-grop "
+                    "plugins`).", group="llm", min_length=1,
+        door=Door(sweep="llm.backend"))
+    model: str | None = setting(
+        None, "Model name (openai) or GGUF path (embedded).", group="backend",
+        door=Door(sweep="llm.model"))
+    base_url: str | None = setting(
+        None, "OpenAI-compatible endpoint (default: $OPENAI_BASE_URL).", group="backend",
+        door=Door(sweep="llm.base_url"))
+    replay: str | None = setting(
+        None, "JSONL of recorded calls, for --llm replay.", group="backend",
+        door=Door(sweep="llm.replay", path="file"))
+    timeout_s: float = setting(
+        60.0, "Seconds one LLM call may take, retries and their waits included.",
+        group="backend", gt=0, identity=False, door=Door(cli="--timeout"))
+    max_answer_bytes: int = setting(
+        1024 * 1024, "The largest LLM answer accepted, bytes (openai); a larger one is an "
+                     "error.", group="backend", ge=1, identity=False)
+    retries: int = setting(
+        3, "Retries on transient LLM errors (connection, 429, 5xx).", group="backend", ge=0,
+        identity=False)
+    temperature: float = setting(
+        0.1, "Sampling temperature of every LLM call (the paper's 0.1).", group="llm",
+        ge=0, le=2, door=Door(sweep="llm.temperature"))
+    top_p: float = setting(
+        1.0, "Nucleus sampling: keep the most likely tokens up to this probability.",
+        group="llm", ge=0, le=1)
+    max_tokens: int = setting(512, "Most tokens one LLM answer may have.", group="llm",
+                              ge=1)
+    frequency_penalty: float = setting(
+        0.0, "Penalty on tokens by how often they appeared (OpenAI's meaning).", group="llm",
+        ge=-2, le=2)
+    presence_penalty: float = setting(
+        0.0, "Penalty on tokens that appeared at all (OpenAI's meaning).", group="llm",
+        ge=-2, le=2)
+    cache: str | None = setting(
+        None, "The shared LLM answer cache's directory (None: no cache); it changes no "
+              "answer.", group="cache", identity=False,
+        door=Door(cli="--cache-dir", path="dir",
+                  cli_help="The shared LLM answer cache [default: $LLM_GROP_CACHE_DIR, "
+                           "else ~/.cache/llm-grop/llm-calls]."))
+
+    def __init__(self, **values: Any) -> None:
+        """A record of ``values`` (field names), every value checked: the first problem is
+        one :class:`BadInput` naming the field (``param``)."""
+        unknown = [k for k in values if k not in type(self).model_fields]
+        if unknown:
+            raise BadInput(_unknown_words(unknown[0]), param=unknown[0])
+        try:
+            super().__init__(**_coerced(values))
+        except ValidationError as exc:
+            raise _problem(exc) from None
+
+    @classmethod
+    def make(cls, values: Mapping[str, Any] | None = None, **more: Any) -> RunSettings:
+        """A record from ``values`` and ``more`` (field names), checked as the constructor
+        checks them."""
+        return cls(**(dict(values or {}) | more))
+
+    def with_values(self, **changes: Any) -> RunSettings:
+        """This record with ``changes`` (field names), checked as :meth:`make` checks."""
+        if not changes:
+            return self
+        return type(self).make(self.model_dump() | changes)
+
+    def identity(self) -> dict[str, Any]:
+        """The fields that decide a run's result, by name (not the cache, deadlines or
+        retries, which change no answer)."""
+        return {name: value for name, value in self.model_dump(mode="json").items()
+                if extra(name).get("identity", True)}
+
+
+def _coerced(given: dict[str, Any]) -> dict[str, Any]:
+    """``given`` with paths and sequences in the record's types (``Path`` -> text, a list
+    -> a tuple), so callers may pass what they hold."""
+    out: dict[str, Any] = {}
+    for name, value in given.items():
+        if isinstance(value, list | tuple):
+            value = tuple(os.fspath(v) if isinstance(v, os.PathLike) else v for v in value)
+        elif isinstance(value, os.PathLike):
+            value = os.fspath(value)
+        out[name] = value
+    return out
+
+
+def _problem(exc: ValidationError) -> BadInput:
+    """The first of pydantic's complaints as a :class:`BadInput` naming the field."""
+    first = exc.errors(include_url=False)[0]
+    loc = first.get("loc", ())
+    name = str(loc[0]) if loc else "settings"
+    given = first.get("input")
+    shown = None if isinstance(given, list | tuple | Mapping) else given
+    return BadInput(first_reason(first), param=name, value=shown)
+
+
+#: What a type error expected, in plain words.
+_EXPECTED = {"int_type": "a whole number", "int_parsing": "a whole number",
+             "int_from_float": "a whole number", "float_type": "a number",
+             "float_parsing": "a number", "string_type": "text", "bool_type": "true or false",
+             "bool_parsing": "true or false", "tuple_type": "a list", "finite_number":
+             "a finite number", "literal_error": "one of {expected}"}
+#: Plain words for a bound that was not kept.
+_BOUNDS = {"greater_than": "must be greater than {gt}", "greater_than_equal":
+           "must be at least {ge}", "less_than": "must be less than {lt}",
+           "less_than_equal": "must be at most {le}", "string_too_short":
+           "must not be empty", "string_too_long": "must be at most {max_length} characters"}
+
+
+def first_reason(error: Mapping[str, Any]) -> str:
+    """One pydantic error in plain words."""
+    kind = error.get("type", "")
+    ctx = dict(error.get("ctx") or {})
+    if kind in _BOUNDS:
+        return _BOUNDS[kind].format(**ctx)
+    if kind in _EXPECTED:
+        return "expected " + _EXPECTED[kind].format(**ctx)
+    return str(error.get("msg", "not valid")).removeprefix("Value error, ")
+
+
+def _unknown_words(name: str) -> str:
+    """What to say of a setting that does not exist, with the nearest names."""
+    import difflib
+
+    near = difflib.get_close_matches(name, list(RunSettings.model_fields), n=3)
+    return "unknown setting" + (f"; did you mean {', '.join(map(repr, near))}?" if near else "")
+
+
+def extra(name: str) -> dict[str, Any]:
+    """The metadata written beside field ``name`` (group, identity, door)."""
+    info = RunSettings.model_fields[name]
+    return dict(info.json_schema_extra or {})  # type: ignore[arg-type]
+
+
+def door(name: str) -> Door:
+    """How the front doors spell field ``name``."""
+    return Door(**extra(name).get("door", {}))
+
+
+def help_text(name: str) -> str:
+    """Field ``name``'s help, units included."""
+    return RunSettings.model_fields[name].description or ""
+
+
+def fields(group: str | None = None) -> list[str]:
+    """The record's field names (of one ``group``), in their order."""
+    return [n for n in RunSettings.model_fields if group is None or extra(n)["group"] == group]
+
+
+def flag(name: str) -> str:
+    """The command-line flag of field or parameter ``name``: ``m`` -> ``--configurations``,
+    ``guess`` -> ``--no-guess``, anything else ``--name-with-dashes``."""
+    if name in RunSettings.model_fields:
+        d = door(name)
+        if d.negate:
+            return d.negate
+        if d.cli:
+            return d.cli
+    return "--" + name.replace("_", "-")
+
+
+def label(name: str, where: Interface, value: object = None) -> str:
+    """Field or parameter ``name`` (with the ``value`` given for it, when it helps) in the
+    words of the front door ``where``: ``--configurations 0``, ``m`` (a sweep file's
+    key), ``"m"`` (a JSON field) or ``m=0`` (Python)."""
+    field, dot, key = name.partition(".")
+    if dot and field in RunSettings.model_fields and where == "cli":
+        # An entry of a mapping setting: ``--sim-option timestep_s=x``.
+        return f"{flag(field)} {key}" + ("" if value is None else f"={value}")
+    known = name in RunSettings.model_fields
+    d = door(name) if known else Door()
+    if where == "cli":
+        named = flag(name)
+        if value is None or (known and d.negate):
+            return named
+        text = str(value)
+        return f"{named} {text if text and ' ' not in text else repr(text)}"
+    if where == "sweep":
+        return d.sweep or name if value is None else f"{d.sweep or name} {value}"
+    if where == "json":
+        return d.json or name
+    if value is None:
+        return name
+    return f"{name}={value if isinstance(value, int | float) else str(value)!r}"
+
+
+#: A setting a message mentions, spelled as Python's keyword: ``guess=False``, ``chairs=N``.
+_MENTION = re.compile(r"\b([a-z][a-z_]*)=([^\s,;:)]+)")
+#: Python's literals a mention may hold, as JSON spells them.
+_JSON_LITERALS = {"True": "true", "False": "false", "None": "null"}
+
+
+def words(text: str, where: Interface) -> str:
+    """``text`` (a message or a warning) with each setting it mentions as Python's keyword
+    (``guess=False``) spelled as ``where`` spells it: ``--no-guess``, ``--chairs N``."""
+    if where == "python":
+        return text
+
+    def one(m: re.Match[str]) -> str:
+        name, value = m.group(1), m.group(2)
+        if name not in RunSettings.model_fields:
+            return m.group(0)
+        if where == "json":
+            return f'"{label(name, where)}": {_JSON_LITERALS.get(value, value)}'
+        if where == "sweep":
+            return f"{label(name, where)}: {value}"
+        return label(name, where, value)
+
+    return _MENTION.sub(one, text)
+
+
+def in_words(exc: BadInput, where: Interface) -> str:
+    """``exc``'s one-line message with its parameter, and the settings it mentions, named
+    as the front door ``where`` names them."""
+    detail = words(exc.detail if exc.param is not None else str(exc), where)
+    if exc.param is None:
+        return detail
+    shown = exc.value if where != "json" else None
+    return f"{label(exc.param, where, shown)}: {detail}"
+
+
+#: The record as nothing changes it: every default, for components to read theirs from.
+DEFAULTS = RunSettings()
