@@ -8,7 +8,7 @@ Errors raised through the API name the API's parameters (``method: unknown metho
 
 from __future__ import annotations
 
-from llm_grop.errors import BadInput, LLMGropError
+from llm_grop.errors import LLMGropError
 
 #: API parameter -> the flag (or argument) that gives it, where the two differ.
 FLAGS: dict[str, str] = {
@@ -43,9 +43,10 @@ def cli_words(text: str) -> str:
 def reworded(exc: LLMGropError) -> str:
     """``exc``'s one-line message in the command line's words."""
     text = cli_words(getattr(exc, "detail", None) or str(exc))
-    if not isinstance(exc, BadInput) or getattr(exc, "param", None) is None:
+    param = getattr(exc, "param", None)
+    if param is None:
         return text
-    name = flag(exc.param)
+    name = flag(param)
     if exc.value is None:
         return f"{name}: {text}"
     value = str(exc.value)
