@@ -53,7 +53,8 @@ def public_parameters(files: list[Path], root: Path) -> list[tuple[int, str]]:
     """``(parameter count, name)`` of every public function and method."""
     out = []
     for f in files:
-        if any(part.startswith("_") and part != "__init__.py" for part in f.relative_to(root).parts):
+        parts = f.relative_to(root).parts
+        if any(part.startswith("_") and part != "__init__.py" for part in parts):
             continue
         tree = ast.parse(f.read_text(encoding="utf-8"))
         for node in ast.walk(tree):

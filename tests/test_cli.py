@@ -87,7 +87,7 @@ def test_malformed_catalog_file(tmp_path: Path, capsys) -> None:
 def test_unreachable_base_url(capsys, monkeypatch) -> None:
     monkeypatch.setenv("OPENAI_API_KEY", "test")
     assert main(["arrange", REQUEST, "--llm", "openai", "--base-url", "http://127.0.0.1:9/v1",
-                 "--retries", "0", "--timeout", "2"]) == 2
+                 "--retries", "0", "--timeout", "2"]) == 3  # unavailable: not bad input
     assert "127.0.0.1:9" in _one_line_error(capsys)
 
 

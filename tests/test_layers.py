@@ -1,168 +1,111 @@
-"""The package's layers: no import cycles, and none of the arrows that must never exist.
+"""The package's layers as a contract: import-linter checks ``.importlinter``'s contracts.
 
-Every import counts, at module level or inside a function, and so do
-``importlib.import_module`` calls with a literal name. A package here is a subpackage of
-``llm_grop`` (``planning``) or a top-level module (``api``, ``errors``).
+Every subpackage and top-level module of ``llm_grop`` sits in one layer and imports only
+the layers below it, and none of the architecture's forbidden arrows exists, directly or
+through other modules (import-linter follows every chain of imports, at module level,
+inside functions and under ``TYPE_CHECKING``).
 """
 
 from __future__ import annotations
 
-import ast
-from collections import defaultdict
+import configparser
+import os
+import re
+import subprocess
+import sys
 from pathlib import Path
 
-import pytest
-
-SRC = Path(__file__).resolve().parents[1] / "src" / "llm_grop"
-
-#: What each package may never import (the architecture's forbidden arrows).
-FORBIDDEN: dict[str, set[str]] = {
-    "world": {"*"},  # representation only: nothing but errors
-    "geometry": {"*"},  # below planning and simulation: nothing but world and errors
-    "llm": {"world", "language", "arrangement", "planning", "simulation", "methods",
-            "evaluation", "experiment", "render", "api", "cli", "ratings"},
-    # Reading people's words sits below arrangement and evaluation, which both read
-    # through it; it never reaches up into them.
-    "language": {"arrangement", "evaluation", "planning", "simulation", "methods",
-                 "experiment", "render", "api", "cli", "ratings", "env", "geometry"},
-    "arrangement": {"evaluation", "experiment", "planning", "simulation", "methods", "api",
-                    "cli", "render", "ratings"},
-    "planning": {"evaluation", "experiment", "simulation", "methods", "api", "cli", "render",
-                 "ratings", "execution"},
-    "simulation": {"evaluation", "experiment", "planning", "methods", "api", "cli", "render",
-                   "ratings", "execution"},
-    # The executive runs plans on simulators' primitives: it reads plans, never makes them.
-    "execution": {"evaluation", "experiment", "planning", "methods", "api", "cli", "render",
-                  "ratings", "arrangement", "language", "llm", "env"},
-    "methods": {"evaluation", "experiment", "api", "cli", "render", "ratings"},
-    "evaluation": {"api", "experiment", "arrangement", "planning", "simulation", "methods",
-                   "llm", "render", "cli", "ratings"},
-    "render": {"evaluation", "experiment", "api", "cli", "arrangement", "planning",
-               "simulation", "methods", "llm", "ratings"},
-    "api": {"experiment", "cli", "evaluation", "render", "ratings"},
-    "experiment": {"cli", "ratings"},
-    "env": {"evaluation", "experiment", "api", "cli", "methods", "ratings"},
-    # The human study sits beside the bench: it reads results, never runs a pipeline.
-    "ratings": {"cli", "api", "llm", "arrangement", "planning", "simulation", "methods",
-                "env", "render", "service"},
-    # The service calls the public API as the CLI does; it never rates, sweeps or studies.
-    "service": {"cli", "evaluation", "experiment", "ratings", "env"},
-    # The doctor must run when parts are broken: it checks them from outside and loads
-    # none of the pipeline.
-    "doctor": {"api", "cli", "world", "geometry", "language", "arrangement", "planning",
-               "methods", "evaluation", "experiment", "execution", "render", "env", "ratings",
-               "service"},
-}
-#: What a package marked ``*`` may still import.
-ALLOWED_BELOW = {"world": {"errors"}, "geometry": {"errors", "world"}}
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src" / "llm_grop"
+CONFIG = ROOT / ".importlinter"
+#: What the rating site must never load, not even through another module.
+PIPELINE = ("api", "planning", "simulation", "methods")
 #: Packages the rater's knowledge must never reach, not even by name.
 PLANNING = ("arrangement", "planning", "methods", "simulation", "geometry")
 
 
-def imported_modules(path: Path, root: Path) -> list[str]:
-    """Absolute names of every module ``path`` imports (``root`` holds ``llm_grop``)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-    parts = path.relative_to(root).with_suffix("").parts
-    package = ".".join(parts if parts[-1] == "__init__" else parts[:-1]).removesuffix(
-        ".__init__")
-    out = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            out += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                parent = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
-                base = f"{parent}.{base}" if base else parent
-            # `from llm_grop import seeds` imports the module, not the package's facade.
-            out += ([] if base == "llm_grop" else [base]) + [f"{base}.{a.name}"
-                                                              for a in node.names]
-        elif isinstance(node, ast.Call) and node.args \
-                and isinstance(node.args[0], ast.Constant) \
-                and getattr(node.func, "attr", getattr(node.func, "id", "")) in (
-                    "import_module", "__import__"):
-            out.append(str(node.args[0].value))
-    return out
+def contracts(path: Path = CONFIG) -> dict[str, configparser.SectionProxy]:
+    """The contracts of the import-linter file ``path``, by their section's id."""
+    parser = configparser.ConfigParser()
+    parser.read(path, encoding="utf-8")
+    prefix = "importlinter:contract:"
+    return {s.removeprefix(prefix): parser[s] for s in parser.sections()
+            if s.startswith(prefix)}
 
 
-def package_of(module: str, root: Path) -> str | None:
-    """The package a dotted module name belongs to, or ``None`` outside ``llm_grop``."""
-    parts = module.split(".")
-    if parts[0] != "llm_grop":
-        return None
-    if len(parts) == 1:
-        return "llm_grop"
-    name = parts[1]
-    exists = (root / "llm_grop" / name).is_dir() or (root / "llm_grop" / f"{name}.py").is_file()
-    return name if exists else "llm_grop"
+def layered(path: Path = CONFIG) -> list[str]:
+    """The modules that the layers contract of ``path`` places, top layer first."""
+    lines = contracts(path)["layers"]["layers"].split("\n")
+    return [m.strip("() ") for line in lines for m in re.split(r"[|:]", line) if m.strip()]
 
 
-def package_graph(root: Path) -> dict[str, set[str]]:
-    """``package -> packages it imports`` for the tree under ``root/llm_grop``."""
-    graph: dict[str, set[str]] = defaultdict(set)
-    for path in sorted((root / "llm_grop").rglob("*.py")):
-        rel = path.relative_to(root / "llm_grop").parts
-        source = "llm_grop" if rel == ("__init__.py",) else rel[0].removesuffix(".py")
-        graph[source]
-        for module in imported_modules(path, root):
-            target = package_of(module, root)
-            if target is not None and target != source:
-                graph[source].add(target)
-    return dict(graph)
+def package_modules(src: Path = SRC) -> set[str]:
+    """Every subpackage and top-level module of the package in ``src``."""
+    return {p.name for p in src.iterdir() if (p / "__init__.py").is_file()} | {
+        p.stem for p in src.glob("*.py") if p.name != "__init__.py"}
 
 
-def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
-    """Every strongly connected set of more than one package (Tarjan's algorithm)."""
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    out: list[list[str]] = []
-
-    def visit(v: str) -> None:
-        index[v] = low[v] = len(index)
-        stack.append(v)
-        for w in graph.get(v, ()):
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in stack:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            component = []
-            while True:
-                w = stack.pop()
-                component.append(w)
-                if w == v:
-                    break
-            if len(component) > 1:
-                out.append(sorted(component))
-
-    for v in sorted(graph):
-        if v not in index:
-            visit(v)
-    return out
+def lint(config: Path, path: Path = SRC.parent) -> tuple[int, str]:
+    """import-linter's exit status and report for the contracts in ``config``, on the
+    packages found first in ``path``. It runs in a process of its own: it configures
+    logging for itself, which would silence the package's loggers in the tests after."""
+    run = ("import sys; from importlinter.cli import lint_imports; "
+           "sys.exit(lint_imports(config_filename=sys.argv[1], no_cache=True, no_logo=True))")
+    paths = os.pathsep.join(filter(None, [str(path), os.environ.get("PYTHONPATH")]))
+    done = subprocess.run([sys.executable, "-c", run, str(config)], capture_output=True,
+                          text=True, env=os.environ | {"PYTHONPATH": paths})
+    return done.returncode, done.stdout + done.stderr
 
 
-def violations(graph: dict[str, set[str]]) -> list[str]:
-    """The forbidden arrows present in ``graph``."""
-    out = []
-    for source, targets in sorted(graph.items()):
-        banned = FORBIDDEN.get(source, set())
-        for target in sorted(targets):
-            if "*" in banned and target not in ALLOWED_BELOW[source] \
-                    or target in banned:
-                out.append(f"{source} -> {target}")
-    return out
+def test_every_module_is_in_exactly_one_layer() -> None:
+    placed = layered()
+    assert len(placed) == len(set(placed))
+    assert package_modules() - set(placed) == set(), "a module sits in no layer"
+    assert set(placed) - package_modules() == set(), "a layer names no module"
+    assert contracts()["layers"].getboolean("exhaustive")
 
 
-def test_there_are_no_import_cycles_between_packages() -> None:
-    graph = package_graph(SRC.parent)
-    assert {"world", "planning", "simulation", "evaluation", "experiment"} <= set(graph)
-    assert cycles(graph) == []
+def test_the_import_contracts_hold() -> None:
+    code, report = lint(CONFIG)
+    assert code == 0, report
+    assert re.search(r"Contracts: \d+ kept, 0 broken", report), report
 
 
-def test_no_forbidden_arrow_exists() -> None:
-    assert violations(package_graph(SRC.parent)) == []
+def test_every_contract_follows_indirect_imports() -> None:
+    for name, contract in contracts().items():
+        assert not contract.getboolean("allow_indirect_imports", False), name
+    banned = contracts()["ratings"]["forbidden_modules"].split()
+    assert {f"llm_grop.{p}" for p in PIPELINE} <= set(banned)
+
+
+def test_a_forbidden_import_through_another_module_breaks_a_contract(tmp_path: Path) -> None:
+    pkg = tmp_path / "layered_demo"
+    for name, body in (("__init__", ""), ("site", "from layered_demo import harness\n"),
+                       ("harness", "def f():\n    from layered_demo import pipeline\n"),
+                       ("pipeline", "")):
+        pkg.mkdir(exist_ok=True)
+        (pkg / f"{name}.py").write_text(body)
+    config = tmp_path / ".importlinter"
+    config.write_text("[importlinter]\nroot_package = layered_demo\n\n"
+                      "[importlinter:contract:site]\nname = site loads no pipeline\n"
+                      "type = forbidden\nsource_modules = layered_demo.site\n"
+                      "forbidden_modules = layered_demo.pipeline\n")
+    code, report = lint(config, tmp_path)
+    assert code == 1
+    assert "layered_demo.site -> layered_demo.harness" in report
+    assert "layered_demo.harness -> layered_demo.pipeline" in report
+
+
+def test_the_rating_site_loads_no_pipeline() -> None:
+    # What import-linter cannot see: a package's __init__ runs with any of its modules.
+    code = ("import importlib, pkgutil, sys, llm_grop.ratings as r\n"
+            "for m in pkgutil.iter_modules(r.__path__):\n"
+            "    importlib.import_module('llm_grop.ratings.' + m.name)\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[:2] in\n"
+            "             [['llm_grop', p] for p in sys.argv[1:]]))\n")
+    done = subprocess.run([sys.executable, "-c", code, *PIPELINE], capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.strip() == "[]"
 
 
 def test_planning_code_never_names_the_rater() -> None:
@@ -176,23 +119,11 @@ def test_planning_code_never_names_the_rater() -> None:
     assert offenders == []
 
 
-@pytest.mark.parametrize("source", [
-    "from llm_grop.evaluation.rater import rate\n",
-    "import llm_grop.evaluation\n",
-    "from llm_grop import evaluation\n",
-    "def f():\n    from ...evaluation import rules\n",
-    "import importlib\nimportlib.import_module('llm_grop.evaluation')\n",
-])
-def test_the_scan_catches_a_forbidden_import(source: str, tmp_path: Path) -> None:
-    pkg = tmp_path / "llm_grop" / "planning" / "sub"
-    pkg.mkdir(parents=True)
-    (tmp_path / "llm_grop" / "evaluation").mkdir()
-    (pkg / "x.py").write_text(source)
-    assert violations(package_graph(tmp_path)) == ["planning -> evaluation"]
+def test_names_moved_down_a_layer_stay_importable_where_they_were() -> None:
+    from llm_grop import figures
+    from llm_grop.experiment import rows, runner
+    from llm_grop.render import table
 
-
-def test_the_scan_catches_a_cycle(tmp_path: Path) -> None:
-    for name, other in (("world", "render"), ("render", "world")):
-        (tmp_path / "llm_grop" / name).mkdir(parents=True, exist_ok=True)
-        (tmp_path / "llm_grop" / name / "m.py").write_text(f"import llm_grop.{other}.m\n")
-    assert cycles(package_graph(tmp_path)) == [["render", "world"]]
+    assert (runner.ROWS, runner.read_rows) == (rows.ROWS, rows.read_rows)
+    assert (table.BACKGROUND, table.DPI, table.STYLE, table.save_png) == (
+        figures.BACKGROUND, figures.DPI, figures.STYLE, figures.save_png)

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
         understand,
     )
     from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions
-    from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError
+    from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError, LLMTransient
     from llm_grop.evaluation.rater import Rating, rate
     from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
     from llm_grop.llm.registry import register_backend
@@ -77,6 +77,7 @@ _EXPORTS: dict[str, str] = {
     "Infeasible": "llm_grop.errors",
     "LLMError": "llm_grop.errors",
     "LLMGropError": "llm_grop.errors",
+    "LLMTransient": "llm_grop.errors",
     "Rating": "llm_grop.evaluation.rater",
     "rate": "llm_grop.evaluation.rater",
     "LLM": "llm_grop.llm.base",
@@ -123,6 +124,7 @@ __all__ = [
     "LLM",
     "LLMError",
     "LLMGropError",
+    "LLMTransient",
     "ObjectSpec",
     "Placement",
     "PlanResult",

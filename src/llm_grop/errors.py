@@ -5,17 +5,13 @@ This module imports nothing from the package, so every layer may raise these.
 
 from __future__ import annotations
 
+#: Exit status of an internal error (a bug in llm-grop): sysexits' ``EX_SOFTWARE``, apart
+#: from every status an error of this module gives.
+INTERNAL_ERROR_EXIT = 70
+
 
 class LLMGropError(Exception):
-    """Base class: an error with a one-line message meant for the user."""
-
-    exit_code = 2
-
-
-class BadInput(LLMGropError, ValueError):
-    """Bad input: an unknown object, a malformed file, a bad argument (exit 2). It is a
-    :class:`ValueError`, so ``except ValueError`` catches it too. For "nothing feasible"
-    (no arrangement or plan exists) catch :class:`Infeasible`.
+    """Base class: an error with a one-line message meant for the user.
 
     ``param`` names the Python API's parameter at fault (``"method"``) and ``value`` what
     was given for it, when that helps: the message then reads ``method: unknown method
@@ -40,9 +36,19 @@ class BadInput(LLMGropError, ValueError):
         return (_rebuilt, (type(self), self.detail, self.param, self.value))
 
 
-def _rebuilt(cls: type[BadInput], detail: str, param: str, value: object) -> BadInput:
-    """A pickled :class:`BadInput` with its parameter, made again."""
+def _rebuilt(cls: type[LLMGropError], detail: str, param: str, value: object) -> LLMGropError:
+    """A pickled error with its parameter, made again."""
     return cls(detail, param=param, value=value)
+
+
+class BadInput(LLMGropError, ValueError):
+    """Bad input: an unknown object, a malformed file, a bad argument (exit 2). It is a
+    :class:`ValueError`, so ``except ValueError`` catches it too. For "nothing feasible"
+    (no arrangement or plan exists) catch :class:`Infeasible`; for an LLM service that did
+    not answer this time, :class:`LLMTransient`.
+    """
+
+    exit_code = 2
 
 
 class UnknownObject(BadInput):
@@ -64,17 +70,24 @@ class CatalogError(BadInput):
 
 
 class LLMError(BadInput):
-    """The LLM could not be used: unreachable, misconfigured, or never usable."""
+    """The LLM could not be used as configured: a wrong key, model, file or replay file,
+    or answers that never give a usable reading (bad input, exit 2)."""
 
 
 class LLMUnavailable(LLMError):
-    """The LLM endpoint or model could not be reached or loaded."""
+    """The LLM endpoint or model cannot be used as configured: a refused key, an unknown
+    model, a missing model file (bad input, exit 2). An endpoint that did not answer this
+    time is :class:`LLMTransient`."""
 
 
-class LLMTransient(LLMUnavailable):
-    """The LLM did not answer this time (unreachable, over the deadline, busy, failing
-    with 5xx, or a garbled answer) where asking again later may succeed; a wrong key,
-    model or configuration is :class:`LLMUnavailable` and stays so."""
+class LLMTransient(LLMGropError):
+    """The LLM service did not answer this time (unreachable, over the deadline, busy,
+    failing with 5xx, or a garbled answer) where asking again later may succeed (exit 3).
+
+    It is not bad input, so neither ``except ValueError`` nor ``except LLMError`` catches
+    it; a wrong key, model or configuration is :class:`LLMUnavailable` and stays so."""
+
+    exit_code = 3
 
 
 class ReplayMissing(LLMError):

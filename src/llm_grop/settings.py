@@ -40,7 +40,7 @@ from pydantic import (
     WithJsonSchema,
 )
 
-from llm_grop.errors import BadInput
+from llm_grop.errors import BadInput, LLMGropError
 
 #: The front doors a setting comes through; each names a field its own way.
 Interface = Literal["python", "cli", "sweep", "json"]
@@ -428,7 +428,7 @@ def words(text: str, where: Interface) -> str:
     return _MENTION.sub(one, text)
 
 
-def in_words(exc: BadInput, where: Interface) -> str:
+def in_words(exc: LLMGropError, where: Interface) -> str:
     """``exc``'s one-line message with its parameter, and the settings it mentions, named
     as the front door ``where`` names them."""
     detail = words(exc.detail if exc.param is not None else str(exc), where)

@@ -53,7 +53,7 @@ def test_max_failed_stops_a_bench_whose_server_is_down(chat_server, tmp_path: Pa
                                                        capsys) -> None:
     chat_server.plan.extend([503] * 1000)
     out = tmp_path / "down"
-    assert _bench(chat_server, out, "--max-failed", "2") == 2
+    assert _bench(chat_server, out, "--max-failed", "2") == 3  # the service is unavailable
     err = capsys.readouterr().err.strip()
     assert err.startswith("llm-grop: error: --max-failed 2: 2 trials got no LLM answer")
     assert err.endswith("stopped early, every finished trial is saved; rerun to retry them")

@@ -105,9 +105,9 @@ def test_retries_recover_from_500_and_429(chat_server: ChatServer) -> None:
     assert all(body == chat_server.requests[0] for body in chat_server.requests)
 
 
-def test_exhausted_retries_are_unavailable(chat_server: ChatServer) -> None:
+def test_exhausted_retries_are_transient(chat_server: ChatServer) -> None:
     chat_server.plan = deque([503, 503, 503, 503])
-    with pytest.raises(LLMUnavailable) as caught:
+    with pytest.raises(LLMTransient) as caught:
         make(chat_server, max_retries=2).complete("hi", PARAMS)
     message = str(caught.value)
     assert len(chat_server.requests) == 3
@@ -119,7 +119,7 @@ def test_exhausted_retries_are_unavailable(chat_server: ChatServer) -> None:
 def test_unreachable_endpoint(closed_port: int) -> None:
     url = f"http://127.0.0.1:{closed_port}/v1"
     llm = OpenAILLM(BackendOptions(base_url=url, max_retries=1, timeout_s=5))
-    with pytest.raises(LLMUnavailable) as caught:
+    with pytest.raises(LLMTransient) as caught:
         llm.complete("hi", PARAMS)
     assert str(caught.value) == (
         f"openai backend: cannot reach {url} (connection refused) after 1 retry")
@@ -127,14 +127,14 @@ def test_unreachable_endpoint(closed_port: int) -> None:
 
 def test_unreachable_without_retries_says_so(closed_port: int) -> None:
     url = f"http://127.0.0.1:{closed_port}/v1"
-    with pytest.raises(LLMUnavailable, match=r"connection refused\) \(retries disabled\)$"):
+    with pytest.raises(LLMTransient, match=r"connection refused\) \(retries disabled\)$"):
         OpenAILLM(BackendOptions(base_url=url, max_retries=0)).complete("hi", PARAMS)
 
 
-def test_timeout_is_unavailable(chat_server: ChatServer) -> None:
+def test_timeout_is_transient(chat_server: ChatServer) -> None:
     chat_server.delay_s = 1.0
     llm = make(chat_server, timeout_s=0.1, max_retries=0)
-    with pytest.raises(LLMUnavailable,
+    with pytest.raises(LLMTransient,
                        match=r"cannot reach .* \(no answer within the 0.1 s deadline\)"):
         llm.complete("hi", PARAMS)
 
@@ -169,9 +169,11 @@ def test_other_api_error_gives_status_and_message(chat_server: ChatServer) -> No
 
 @pytest.mark.parametrize("body", [b"not json", b'{"foo": 1}', b'{"choices": []}',
                                   b'{"choices": [{"index": 0}]}', b'{"choices": "x"}'])
-def test_malformed_answer_is_unavailable(chat_server: ChatServer, body: bytes) -> None:
+def test_malformed_answer_is_one_line(chat_server: ChatServer, body: bytes) -> None:
     chat_server.raw = deque([body])
-    with pytest.raises(LLMUnavailable) as caught:
+    # Text that is no JSON is garbled on the way (transient); JSON without a reply is not.
+    kind = LLMTransient if body == b"not json" else LLMUnavailable
+    with pytest.raises(kind) as caught:
         make(chat_server).complete("hi", PARAMS)
     message = str(caught.value)
     assert message.startswith("openai backend: ")
@@ -191,7 +193,7 @@ def test_a_trickling_server_is_bounded_by_the_whole_calls_deadline(
     chat_server.trickle_s = 0.05  # a 400-byte answer would take 20 s
     llm = make(chat_server, timeout_s=1.0, max_retries=2)
     t0 = time.monotonic()
-    with pytest.raises(LLMUnavailable, match=r"no answer within the 1 s deadline"):
+    with pytest.raises(LLMTransient, match=r"no answer within the 1 s deadline"):
         llm.complete("hi", PARAMS)
     assert time.monotonic() - t0 < 1.5
 
@@ -201,7 +203,7 @@ def test_a_retry_after_past_the_deadline_is_not_waited_for(chat_server: ChatServ
     chat_server.retry_after = "50"
     llm = make(chat_server, timeout_s=3.0, max_retries=2)
     t0 = time.monotonic()
-    with pytest.raises(LLMUnavailable) as info:
+    with pytest.raises(LLMTransient) as info:
         llm.complete("hi", PARAMS)
     assert time.monotonic() - t0 < 1.0 and len(chat_server.requests) == 1
     assert str(info.value).endswith("its next attempt (50.0 s later) would pass the 3 s "
@@ -252,8 +254,6 @@ def test_a_retry_after_that_is_no_number_or_date_falls_back_to_backoff(
 
 def test_passing_failures_are_transient_and_lasting_ones_are_not(chat_server: ChatServer,
                                                                  closed_port: int) -> None:
-    from llm_grop.errors import LLMTransient
-
     chat_server.plan.extend([500])
     with pytest.raises(LLMTransient, match="answered 500"):
         make(chat_server, max_retries=0).complete("hi", PARAMS)

@@ -20,7 +20,7 @@ from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
 from llm_grop.cli.serve import serve
 from llm_grop.cli.sweep import sweep
-from llm_grop.errors import LLMGropError, interrupted
+from llm_grop.errors import INTERNAL_ERROR_EXIT, LLMGropError, interrupted
 
 
 @click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
@@ -71,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
             raise
         click.echo(f"llm-grop: internal error: {type(exc).__name__}: {exc} "
                    "(set LLM_GROP_DEBUG=1 for a traceback)", err=True)
-        return 3
+        return INTERNAL_ERROR_EXIT
     return code if isinstance(code, int) else 0
 
 

@@ -4,7 +4,7 @@ metadata (:func:`llm_grop.settings.label`)."""
 
 from __future__ import annotations
 
-from llm_grop.errors import BadInput, LLMGropError
+from llm_grop.errors import LLMGropError
 from llm_grop.settings import flag, in_words, words
 
 __all__ = ["cli_words", "flag", "reworded"]
@@ -18,6 +18,4 @@ def cli_words(text: str) -> str:
 
 def reworded(exc: LLMGropError) -> str:
     """``exc``'s one-line message in the command line's words."""
-    if isinstance(exc, BadInput):
-        return in_words(exc, "cli")
-    return cli_words(str(exc))
+    return in_words(exc, "cli")

@@ -17,7 +17,8 @@ from llm_grop.errors import BadInput
 
 log = logging.getLogger(__name__)
 
-EPILOG = "Exit status: 0 done, 1 nothing feasible, 2 bad input."
+EPILOG = ("Exit status: 0 done, 1 nothing feasible, 2 bad input, 3 LLM service unavailable "
+          "(try again later).")
 
 F = TypeVar("F", bound=Callable[..., Any])
 

@@ -7,9 +7,10 @@
   bar per method, each labelled with its value to one decimal, with standard-error bars;
   each task is labelled with its number of trials per method (``n``).
 
-As in :mod:`llm_grop.render.table`, only matplotlib's object API and its Agg canvas are
-used, under a fixed style, at a fixed size and resolution; the same summary always gives
-the same PNG bytes. A method or a (method, task) pair without a value is left out.
+In the house style of every picture (:mod:`llm_grop.figures`): only matplotlib's object
+API and its Agg canvas are used, under a fixed style, at a fixed size and resolution; the
+same summary always gives the same PNG bytes. A method or a (method, task) pair without a
+value is left out.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from matplotlib.figure import Figure
 
 from llm_grop.errors import BadInput
 from llm_grop.experiment.summary import Summary
-from llm_grop.render.table import BACKGROUND, DPI, STYLE, save_png
+from llm_grop.figures import BACKGROUND, DPI, STYLE, save_png
 
 #: Size (inches) of the rating-vs-time figure (Fig. 3): 900 x 720 pixels at :data:`DPI`.
 SCATTER_FIGSIZE_IN = (6.0, 4.8)

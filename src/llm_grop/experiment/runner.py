@@ -8,7 +8,8 @@ An output directory holds one experiment:
 * ``trials.jsonl``: one :class:`~llm_grop.world.contract.TrialRow` per finished trial,
   appended and flushed as each one ends, so
   an interrupted run loses no finished trial. A rerun skips the trials already there.
-  When every trial is done the file is rewritten in ``(task, trial, method)`` order.
+  When every trial is done the file is rewritten in ``(task, trial, method)`` order
+  (:mod:`llm_grop.experiment.rows` reads and writes it).
 * ``images/``: each trial's final table, the requested objects listed at the top.
 * ``.lock``: held by the run writing the directory (:mod:`llm_grop.locking`), so a second
   run on it is refused at once, naming the first's process id.
@@ -31,7 +32,6 @@ import hashlib
 import json
 import logging
 import os
-import secrets
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata, resources
@@ -39,10 +39,19 @@ from pathlib import Path
 from typing import Any
 
 from llm_grop import locking, plugins
-from llm_grop.errors import BadInput, LLMUnavailable
+from llm_grop.errors import BadInput, LLMTransient
 from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
 from llm_grop.experiment.paired import PairedComparison, paired_by_trial
 from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
+from llm_grop.experiment.rows import (
+    ROWS,
+    append_row,
+    read_rows,
+    rewrite_rows,
+    row_key,
+    sort_rows_file,
+    table_order,
+)
 from llm_grop.experiment.summary import Summary, summarize, summary_markdown, summary_to_dict
 from llm_grop.experiment.trial import TrialSettings, TrialSpec
 from llm_grop.experiment.worker import Job
@@ -51,11 +60,9 @@ from llm_grop.methods.registry import METHODS
 from llm_grop.simulation.registry import SIMULATORS
 from llm_grop.world.contract import TrialRow
 from llm_grop.world.jsonio import write_bytes, write_json, write_text
-from llm_grop.world.serialize import read_doc
 
 log = logging.getLogger(__name__)
 
-ROWS = "trials.jsonl"
 #: The lock file one run holds in each results directory it writes.
 LOCK = ".lock"
 IDENTITY = "experiment.json"
@@ -154,48 +161,6 @@ def prepare_dir(out: Path, exp: Experiment) -> None:
     write_json(marker, mine)
 
 
-def read_rows(out: Path) -> list[TrialRow]:
-    """The finished trials' rows, each ``(method, task, trial)`` once (the first written,
-    unless only a later one has an LLM answer); a last line cut off by a crash is
-    dropped."""
-    path = out / ROWS
-    if not path.exists():
-        return []
-    rows = []
-    lines = path.read_text(encoding="utf-8").splitlines()
-    for i, line in enumerate(lines):
-        try:
-            data = json.loads(line)
-        except ValueError:
-            if i == len(lines) - 1:
-                break
-            raise BadInput(f"{path} line {i + 1}: not a JSON row") from None
-        rows.append(read_doc(TrialRow, data, f"{path} line {i + 1}"))
-    first: dict[tuple[str, int, int], TrialRow] = {}
-    for row in rows:
-        kept = first.get(_key(row))
-        if kept is None or kept.status == "llm-failed" and row.status != "llm-failed":
-            first[_key(row)] = row
-    if len(first) < len(rows):
-        # Two runs wrote here before runs took the directory's lock; the first row of a
-        # trial is kept, and the next resume rewrites the file without the others.
-        log.warning("%s: %d duplicate rows ignored (the first of each trial is kept)", path,
-                    len(rows) - len(first))
-    return list(first.values())
-
-
-def _key(row: TrialRow) -> tuple[str, int, int]:
-    return (row.method, row.task, row.trial)
-
-
-def _sort_key(row: TrialRow) -> tuple[int, int, str]:
-    return (row.task, row.trial, row.method)
-
-
-def _line(row: TrialRow) -> str:
-    return json.dumps(row.to_json(), separators=(",", ":")) + "\n"
-
-
 @dataclass(frozen=True)
 class Cell:
     """One experiment and the directory that keeps its results (a bench runs one; a sweep
@@ -239,7 +204,7 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
 
     A trial whose LLM failed (``status`` ``llm-failed``) counts as not done: a rerun runs
     it again and its new row replaces the old. With ``max_failed``, the run stops once
-    that many trials of this run failed so: :class:`~llm_grop.errors.LLMUnavailable`,
+    that many trials of this run failed so: :class:`~llm_grop.errors.LLMTransient`,
     every finished trial kept.
     """
     used: dict[str, list[str]] = {BACKENDS.group: [], SIMULATORS.group: [], METHODS.group: []}
@@ -276,12 +241,12 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
             Path(cell.experiment.settings.images).mkdir(parents=True, exist_ok=True)
         # Trials whose LLM failed are run again; their rows go, and the new ones come.
         mine = [r for r in read_rows(cell.out) if r.status != "llm-failed"]
-        done = {_key(r) for r in mine}
+        done = {row_key(r) for r in mine}
         wanted = cell.experiment.specs()
         pending = [Job(index, cell.experiment.settings, s) for s in wanted if s.key not in done]
         jobs += pending
         skipped.append(len(wanted) - len(pending))
-        _rewrite(cell.out, mine)  # drops a cut-off last line before appending
+        rewrite_rows(cell.out, mine)  # drops a cut-off last line before appending
         del mine
     if on_start is not None:
         on_start(len(jobs), sum(skipped))
@@ -296,7 +261,7 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
             for rel, data in finished.pictures:
                 if images is not None:
                     write_bytes(Path(images) / Path(rel).name, data)
-            _append(cell.out / ROWS, finished.row)
+            append_row(cell.out / ROWS, finished.row)
             ran[finished.cell] += 1
             row = finished.row
             log.info("task %s trial %d %s: rating %d, %s", row.task, row.trial, row.method,
@@ -306,7 +271,7 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
             if row.status == "llm-failed":
                 failed.append(row)
                 if max_failed is not None and len(failed) >= max_failed:
-                    raise LLMUnavailable(
+                    raise LLMTransient(
                         f"{len(failed)} trials got no LLM answer (the last: {row.reason}); "
                         "stopped early, every finished trial is saved; rerun to retry them",
                         param="max_failed", value=max_failed)
@@ -317,44 +282,10 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
     outcomes = []
     for index, cell in enumerate(cells):
         if not interrupted:
-            _sort_file(cell.out)
-        mine = tuple(sorted(read_rows(cell.out), key=_sort_key)) if keep_rows else ()
+            sort_rows_file(cell.out)
+        mine = tuple(sorted(read_rows(cell.out), key=table_order)) if keep_rows else ()
         outcomes.append(Outcome(mine, ran[index], skipped[index], interrupted))
     return tuple(outcomes)
-
-
-def _sort_file(out: Path) -> None:
-    """Rewrite the results file in ``(task, trial, method)`` order, its lines as they are
-    (each was checked when written, so it is only parsed for its key, not validated)."""
-    def key(line: str) -> tuple[int, int, str]:
-        row = json.loads(line)
-        return (row["task"], row["trial"], row["method"])
-
-    lines = (out / ROWS).read_text(encoding="utf-8").splitlines(keepends=True)
-    _write_lines(out, sorted((line for line in lines if line.strip()), key=key))
-
-
-def _append(path: Path, row: TrialRow) -> None:
-    """Append ``row`` to the results file ``path`` as one line, synced to disk."""
-    with path.open("a", encoding="utf-8") as f:
-        f.write(_line(row))
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def _rewrite(out: Path, rows: list[TrialRow]) -> None:
-    """Write ``rows`` as the results file, atomically."""
-    _write_lines(out, [_line(row) for row in rows])
-
-
-def _write_lines(out: Path, lines: list[str]) -> None:
-    """Write ``lines`` (each ending in a newline) as the results file, atomically."""
-    tmp = out / f".{ROWS}.{os.getpid()}-{secrets.token_hex(4)}.tmp"
-    with tmp.open("w", encoding="utf-8") as f:
-        f.writelines(lines)
-        f.flush()
-        os.fsync(f.fileno())
-    tmp.replace(out / ROWS)
 
 
 def write_reports(out: Path, rows: Sequence[TrialRow], seed: int = 0) -> Report:

@@ -248,7 +248,7 @@ def cell_dirs(out: Path) -> list[Path]:
     """The cells of the sweep directory ``out`` that hold trials, in the sweep's order
     (its :data:`MARKER` file's, then any other by name); empty for a directory that holds
     no bench results below it."""
-    from llm_grop.experiment.runner import ROWS
+    from llm_grop.experiment.rows import ROWS
 
     named: list[str] = []
     try:

@@ -278,7 +278,7 @@ class OpenAILLM(BaseLLM):
         """Close the HTTP connections; the backend is unusable afterwards."""
         self._client.close()
 
-    def _unavailable(self, exc: openai.OpenAIError) -> LLMUnavailable:
+    def _unavailable(self, exc: openai.OpenAIError) -> LLMUnavailable | LLMTransient:
         """The one-line error for a failed request."""
         where = self.base_url
         if isinstance(exc, _TooLarge):

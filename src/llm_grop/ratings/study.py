@@ -27,7 +27,7 @@ from PIL import Image, UnidentifiedImageError
 
 from llm_grop import seeds
 from llm_grop.errors import BadInput
-from llm_grop.experiment.runner import ROWS, read_rows
+from llm_grop.experiment.rows import ROWS, read_rows
 from llm_grop.experiment.sweep import cell_dirs
 from llm_grop.language.request import parse_request
 from llm_grop.ratings.db import connect, transaction

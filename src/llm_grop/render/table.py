@@ -10,8 +10,6 @@ the same bytes.
 from __future__ import annotations
 
 import math
-import os
-import secrets
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
@@ -26,19 +24,18 @@ from matplotlib.ticker import FuncFormatter, MultipleLocator
 from matplotlib.transforms import offset_copy
 
 from llm_grop.errors import BadInput
+from llm_grop.figures import BACKGROUND, DPI, STYLE, save_png
 from llm_grop.world.arrangement import Arrangement, Placement
 from llm_grop.world.kind_colors import TABLE_TOP, kind_color
 from llm_grop.world.relation import CENTER, STACKING
 from llm_grop.world.seat import Seat
 
-#: Picture size in inches and resolution in dots per inch (1200 x 1050 pixels).
+#: Picture size in inches (1200 x 1050 pixels at :data:`DPI` dots per inch).
 FIGSIZE_IN = (8.0, 7.0)
 #: A picture for a phone's screen, inches: shown about 360 pixels wide, its labels stay
 #: near 10 pixels high.
 PHONE_SIZE_IN = (3.6, 3.9)
-DPI = 150
-#: Colours of the page, the table top and its edge.
-BACKGROUND = "#ffffff"
+#: Colours of the table top and its edge (the page's is :data:`BACKGROUND`).
 TABLE_FACE = TABLE_TOP
 TABLE_EDGE = "#8a6d45"
 RELATION_COLOR = "#333333"
@@ -57,10 +54,6 @@ _SHORT_RELATION = {
     "above and to the right of": "above-right of", "below and to the left of": "below-left of",
     "below and to the right of": "below-right of",
 }
-# Fixed style, so that a user's matplotlibrc cannot change the picture.
-STYLE = {"font.family": "DejaVu Sans", "font.size": 9.0, "axes.linewidth": 0.8,
-          "text.color": "#111111", "axes.edgecolor": "#666666", "xtick.color": "#444444",
-          "ytick.color": "#444444", "axes.labelcolor": "#222222"}
 
 
 def kind_colors(placements: Sequence[Placement]) -> dict[str, str]:
@@ -86,22 +79,6 @@ def draw_arrangement(arrangement: Arrangement, path: str | Path, *, title: str |
         raise BadInput(f"image {path}: only PNG pictures are made; use a name ending in .png")
     with matplotlib.rc_context(STYLE):
         save_png(_figure(arrangement, title, show_relations, size_in), path)
-
-
-def save_png(fig: Figure, path: Path, *, dpi: int = DPI) -> None:
-    """Write ``fig`` to ``path`` as PNG at ``dpi`` dots per inch, replacing it atomically.
-
-    The PNG carries no software or time stamp, so the same figure gives the same bytes.
-    Raises :class:`BadInput` (one line, naming ``path``) if it cannot be written.
-    """
-    tmp = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
-    try:
-        fig.savefig(tmp, format="png", dpi=dpi, facecolor=BACKGROUND,
-                    metadata={"Software": None})
-        tmp.replace(path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise BadInput(f"image {path}: cannot write ({exc.strerror or exc})") from None
 
 
 def _figure(arrangement: Arrangement, title: str | None, show_relations: bool,

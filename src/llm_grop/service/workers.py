@@ -18,7 +18,7 @@ import threading
 import time
 from multiprocessing.process import BaseProcess
 
-from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError
+from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError, LLMTransient
 from llm_grop.processes import ctrl_c_ignored_by_children, die_with_parent
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.jobs import Job, JobStore
@@ -38,11 +38,12 @@ def status_of(exc: BaseException) -> tuple[int, str]:
     """The HTTP status and one-line message a job's failure is answered with: the same
     wording and meaning as the CLI's exit codes (bad input 422, nothing feasible 409).
 
-    The LLM's failures are the server's (503): their words name the server's model files,
-    endpoints and replay files, which stay in its log; so do an internal error's."""
+    The LLM's failures, configured wrong or not answering this time, are the server's
+    (503): their words name the server's model files, endpoints and replay files, which
+    stay in its log; so do an internal error's."""
     if isinstance(exc, Infeasible):
         return 409, str(exc)
-    if isinstance(exc, LLMError):
+    if isinstance(exc, LLMError | LLMTransient):
         return 503, "llm: the server's LLM backend could not answer this request; its log " \
                     "says why"
     if isinstance(exc, BadInput):
