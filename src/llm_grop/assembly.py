@@ -161,7 +161,7 @@ def check_backend(s: RunSettings) -> None:
 
     if BACKENDS.key(s.llm) == "replay" and s.replay is None:
         raise BadInput("needs replay=FILE, a JSONL file of recorded calls", param="llm",
-                       value="replay")
+                       value="replay", mentions=("replay",))
 
 
 def make_simulator(s: RunSettings) -> Simulator:

@@ -17,13 +17,16 @@ class LLMGropError(Exception):
     was given for it, when that helps: the message then reads ``method: unknown method
     'nope' ...`` or ``out='runs/x': ...``, and the command line rewords the name as its
     flag (``--method``, ``--out runs/x``). ``detail`` is the message without the name.
+    ``mentions`` names the settings the message mentions in Python's words
+    (``guess=False``), which each front door spells its own way (``--no-guess``).
     """
 
     exit_code = 2
 
     def __init__(self, message: str = "", *, param: str | None = None,
-                 value: object = None) -> None:
+                 value: object = None, mentions: tuple[str, ...] = ()) -> None:
         self.param, self.value, self.detail = param, value, message
+        self.mentions = tuple(mentions)
         shown = value if isinstance(value, int | float) else str(value)
         named = param if value is None else f"{param}={shown!r}"
         super().__init__(message if param is None else f"{named}: {message}")
@@ -31,14 +34,15 @@ class LLMGropError(Exception):
     def __reduce__(self) -> tuple[object, ...]:
         # Worker processes send errors back pickled; the parameter must survive the trip
         # for the command line to name its flag.
-        if self.param is None:
+        if self.param is None and not self.mentions:
             return super().__reduce__()
-        return (_rebuilt, (type(self), self.detail, self.param, self.value))
+        return (_rebuilt, (type(self), self.detail, self.param, self.value, self.mentions))
 
 
-def _rebuilt(cls: type[LLMGropError], detail: str, param: str, value: object) -> LLMGropError:
-    """A pickled error with its parameter, made again."""
-    return cls(detail, param=param, value=value)
+def _rebuilt(cls: type[LLMGropError], detail: str, param: str | None, value: object,
+             mentions: tuple[str, ...] = ()) -> LLMGropError:
+    """A pickled error with its parameter and mentions, made again."""
+    return cls(detail, param=param, value=value, mentions=mentions)
 
 
 class BadInput(LLMGropError, ValueError):

@@ -182,10 +182,11 @@ class RunSettings(BaseModel):
     # The task-motion planner (paper §III-C)
     weight: float = setting(
         40.0, "GROP's utility weight w (seconds per unit of success probability).",
-        group="plan", ge=0, door=Door(cli="--weight"))
+        group="plan", ge=0, allow_inf_nan=False, door=Door(cli="--weight"))
     fidelity_weight: float = setting(
         1.0, "Seconds of GROP's utility that one centimetre of infidelity costs (stated gaps "
-             "missed, the setting's shift); 0 ignores fidelity.", group="plan", ge=0)
+             "missed, the setting's shift); 0 ignores fidelity.", group="plan", ge=0,
+        allow_inf_nan=False)
     feasibility: str = setting(
         "default", "The planner's feasibility profile: default (assumed) or mujoco (fitted "
                    "in 3D).", group="plan", min_length=1)
@@ -232,7 +233,8 @@ class RunSettings(BaseModel):
         door=Door(sweep="llm.replay", path="file"))
     timeout_s: float = setting(
         60.0, "Seconds one LLM call may take, retries and their waits included.",
-        group="backend", gt=0, identity=False, door=Door(cli="--timeout"))
+        group="backend", gt=0, allow_inf_nan=False, identity=False,
+        door=Door(cli="--timeout"))
     max_answer_bytes: int = setting(
         1024 * 1024, "The largest LLM answer accepted, bytes (openai); a larger one is an "
                      "error.", group="backend", ge=1, identity=False)
@@ -409,15 +411,17 @@ _MENTION = re.compile(r"\b([a-z][a-z_]*)=([^\s,;:)]+)")
 _JSON_LITERALS = {"True": "true", "False": "false", "None": "null"}
 
 
-def words(text: str, where: Interface) -> str:
-    """``text`` (a message or a warning) with each setting it mentions as Python's keyword
-    (``guess=False``) spelled as ``where`` spells it: ``--no-guess``, ``--chairs N``."""
+def words(text: str, where: Interface, names: tuple[str, ...] | None = None) -> str:
+    """``text`` (a message or a warning of the API) with each setting it mentions as
+    Python's keyword (``guess=False``) spelled as ``where`` spells it: ``--no-guess``,
+    ``--chairs N``; only ``names`` when given (what an error says it mentions), else any
+    field of the record."""
     if where == "python":
         return text
 
     def one(m: re.Match[str]) -> str:
         name, value = m.group(1), m.group(2)
-        if name not in RunSettings.model_fields:
+        if name not in RunSettings.model_fields or names is not None and name not in names:
             return m.group(0)
         if where == "json":
             return f'"{label(name, where)}": {_JSON_LITERALS.get(value, value)}'
@@ -429,9 +433,9 @@ def words(text: str, where: Interface) -> str:
 
 
 def in_words(exc: LLMGropError, where: Interface) -> str:
-    """``exc``'s one-line message with its parameter, and the settings it mentions, named
-    as the front door ``where`` names them."""
-    detail = words(exc.detail if exc.param is not None else str(exc), where)
+    """``exc``'s one-line message with its parameter, and the settings it mentions
+    (``exc.mentions``), named as the front door ``where`` names them."""
+    detail = words(exc.detail if exc.param is not None else str(exc), where, exc.mentions)
     if exc.param is None:
         return detail
     shown = exc.value if where != "json" else None

@@ -117,9 +117,8 @@ def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> Non
      "s.yaml: grid.chairs[1]: must be at least 0, got -2"),
     (SWEEP.replace("chairs: [0, 2]", "chairs: []"), "s.yaml: grid.chairs: must not be empty"),
     (SWEEP.replace("chairs: [0, 2]", "colour: [red]"),
-     "s.yaml: grid.colour: unknown key; expected one of tasks, methods, trials, seed, scene, "
-     "chairs, table, simulator, feasibility, weight, fidelity_weight, llm, preferences, "
-     "images"),
+     "s.yaml: grid.colour: unknown key; expected one of tasks, methods, trials, images, llm, "
+     "seed, task_files, catalog_files, scene, chairs, table, m, "),
     (SWEEP.replace("trials: 2", "trials: 2\nchairs: 1"),
      "s.yaml: chairs: both in grid and at the top level; give it in one place"),
     (SWEEP.replace("backend: replay", "backend: replay, temprature: 0.5"),
@@ -130,8 +129,7 @@ def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> Non
     (SWEEP.replace("chairs: [0, 2]", "table: [scene, 12x8]"),
      "s.yaml: cell weight=20,table=12x8: table: 12 x 8 m is not a dining table"),
     (SWEEP.replace("chairs: [0, 2]", "fidelity_weight: [.inf]"),
-     "s.yaml: cell weight=20,fidelity_weight=inf: fidelity_weight: must be a finite number "
-     ">= 0 (seconds per centimetre), got inf"),
+     "s.yaml: grid.fidelity_weight[0]: expected a finite number, got inf"),
     (SWEEP.replace("chairs: [0, 2]", "simulator: [gazebo]"),
      "s.yaml: cell weight=20,simulator=gazebo: simulator: unknown simulator 'gazebo'"),
     (SWEEP.replace(str(RECORDING), "missing.jsonl"), "missing.jsonl: replay file not found"),

@@ -29,7 +29,7 @@ def print_warnings(warnings: Iterable[str], console: Console, where: str = "") -
     to :data:`WARNING_CHARS` characters; never rich markup, never wrapped."""
     for w in warnings:
         line = Text("warning:", style="yellow")
-        line.append(" " + one_line(cli_words(f"{where}: {w}" if where else w)))
+        line.append(" " + one_line(f"{where}: {cli_words(w)}" if where else cli_words(w)))
         console.print(line, soft_wrap=True, highlight=False)
 
 

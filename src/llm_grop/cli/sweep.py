@@ -19,15 +19,12 @@ from llm_grop.settings import in_words
 if TYPE_CHECKING:
     from llm_grop.experiment.sweep import Values
 
-#: The sweep file's keys of an LLM entry -> the settings record's fields.
-_LLM_KEYS = {"backend": "llm", "model": "model", "base_url": "base_url", "replay": "replay",
-             "temperature": "temperature"}
 
 
 def cell_settings(values: Values, base: Path) -> dict[str, Any]:
     """The settings record's fields a sweep cell's values set (paths relative to ``base``);
     a value left out is left to the bench's default."""
-    from llm_grop.experiment.sweep import SWEPT
+    from llm_grop.experiment.sweep import LLM_KEYS, SWEPT
     from llm_grop.settings import door
 
     def path(p: str) -> str:
@@ -45,8 +42,8 @@ def cell_settings(values: Values, base: Path) -> dict[str, Any]:
         del given["table"]
     llm = values.llm
     if llm is not None:
-        given |= {_LLM_KEYS[k]: getattr(llm, k) for k in _LLM_KEYS
-                  if getattr(llm, k) is not None}
+        given |= {name: getattr(llm, key) for key, name in LLM_KEYS.items()
+                  if getattr(llm, key) is not None}
         if llm.replay is not None:
             given["replay"] = path(llm.replay)
         if llm.model is not None:

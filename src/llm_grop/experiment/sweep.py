@@ -79,27 +79,6 @@ def _one_task(value: Any) -> Any:
 Tasks = Annotated[Text | list[Annotated[int, Field(ge=0)]], BeforeValidator(_one_task)]
 
 
-class LLMEntry(BaseModel):
-    """One LLM: the bench's ``--llm``, ``--model``, ``--base-url``, ``--replay`` and
-    ``--temperature`` (a key left out takes the bench's default); ``name`` labels it in
-    cell names (default: backend and model)."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    backend: Text | None = None
-    model: Text | None = None
-    base_url: Text | None = None
-    replay: Text | None = None
-    temperature: Annotated[float, Field(ge=0, le=2)] | None = None
-    name: Text | None = None
-
-    @property
-    def label(self) -> str:
-        """How the entry is named in a cell's name."""
-        return self.name or (self.backend or "embedded") + (
-            f"-{Path(self.model).name}" if self.model else "")
-
-
 #: Settings a sweep file does not set: each trial's own, and how answers are cached.
 _NOT_SWEPT = ("task", "method", "cache")
 
@@ -116,6 +95,34 @@ def _setting_field(name: str) -> tuple[Any, Any]:
 #: sweep name: ``preferences`` is the preferences file; the LLM's are under ``llm``).
 SWEPT: dict[str, str] = {door(n).sweep or n: n for n in RunSettings.model_fields
                          if n not in _NOT_SWEPT and "." not in (door(n).sweep or "")}
+
+
+#: The keys of an ``llm`` entry, each the settings field its sweep name puts under ``llm``.
+LLM_KEYS: dict[str, str] = {door(n).sweep.partition(".")[2]: n  # type: ignore[union-attr]
+                            for n in RunSettings.model_fields
+                            if (door(n).sweep or "").startswith("llm.")}
+
+class _LLMEntry(BaseModel):
+    """One LLM: the settings ``llm``, ``model``, ``base_url``, ``replay`` and
+    ``temperature`` under their sweep names (a key left out takes the bench's default);
+    ``name`` labels it in cell names (default: backend and model)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: Text | None = None
+
+    @property
+    def label(self) -> str:
+        """How the entry is named in a cell's name."""
+        backend, model = self.backend, self.model  # type: ignore[attr-defined]
+        return self.name or (backend or "embedded") + (
+            f"-{Path(model).name}" if model else "")
+
+
+#: One LLM of a sweep file (:class:`_LLMEntry`), its keys made from the settings record.
+LLMEntry = create_model(  # type: ignore[call-overload]
+    "LLMEntry", __base__=_LLMEntry,
+    **{key: _setting_field(name) for key, name in LLM_KEYS.items()})
 
 
 #: The keys whose value is itself a list (a setting that holds several).

@@ -206,7 +206,7 @@ def understand(text: str, catalog: Catalog, llm: CallLog | Callable[[], CallLog]
     if not guess and not fast.named and not typos:
         raise BadInput(f"nothing in {fast.text!r} names an object, and guess=False "
                        f"forbids the LLM to choose them; name the objects to set, {EXAMPLE}",
-                       param="request")
+                       param="request", mentions=("guess",))
     log = llm if isinstance(llm, CallLog) else llm()
     read = read_with_llm(fast, catalog, log, seed, params, say)
     chosen = [o for o in read.reading.objects if o.source == "llm"]
@@ -214,7 +214,7 @@ def understand(text: str, catalog: Catalog, llm: CallLog | Callable[[], CallLog]
         listed = ", ".join(f"{o.count} {o.name}" for o in chosen)
         raise BadInput(f"the {log.backend} LLM chose what {fast.text!r} does not "
                        f"say ({listed}), and guess=False forbids it; name the objects to set",
-                       param="request")
+                       param="request", mentions=("guess",))
     return to_request(read.reading, catalog, (read.record,), read.warnings)
 
 

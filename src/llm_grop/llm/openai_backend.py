@@ -284,7 +284,8 @@ class OpenAILLM(BaseLLM):
         if isinstance(exc, _TooLarge):
             return LLMUnavailable(f"openai backend: the answer from {where} is larger than "
                                   f"{self._max_bytes} bytes; refused (raise "
-                                  "max_answer_bytes=N if it should be allowed)")
+                                  "max_answer_bytes=N if it should be allowed)",
+                                  mentions=("max_answer_bytes",))
         if isinstance(exc, _PastDeadline):
             first = self._unavailable(exc.cause)
             return LLMTransient(f"{str(first).removesuffix(self._after_retries())}; its "

@@ -259,7 +259,7 @@ def set_target_top(scene: Scene, top: Table, *, keep_chairs: bool = True) -> Sce
     what = f"a {top.label} as {target.name!r}"
 
     def refused(why: str) -> BadInput:
-        return BadInput(f"{what} {why}", param="table")
+        return BadInput(f"{what} {why}", param="table", mentions=("chairs",))
 
     if not _inside(poly, rect(0.0, 0.0, scene.width, scene.depth)):
         raise refused(f"extends outside the room ({scene.width:g} x {scene.depth:g} m)")
