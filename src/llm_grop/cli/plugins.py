@@ -7,6 +7,7 @@ import click
 
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
+from llm_grop.errors import BadInput
 
 
 @click.command(epilog=EPILOG)
@@ -25,7 +26,8 @@ def plugins() -> None:
     from llm_grop.experiment.executors import EXECUTORS
     from llm_grop.llm.registry import BACKENDS
     from llm_grop.methods.registry import METHODS
-    from llm_grop.simulation.registry import SIMULATORS
+    from llm_grop.simulation.base import option_names
+    from llm_grop.simulation.registry import SIMULATORS, simulator_class
 
     table = RichTable(title="Available components", title_justify="left")
     for column in ("kind", "name", "chosen with", "from"):
@@ -34,4 +36,22 @@ def plugins() -> None:
         for name in registry.names():
             table.add_row(registry.kind, name, f"{registry.flag} {name}",
                           registry.origin(name))
-    Console().print(table)
+    console = Console()
+    console.print(table)
+    sims = RichTable(title="What each simulator declares (--sim-option KEY=VALUE sets an "
+                           "option)", title_justify="left")
+    for column in ("simulator", "options", "pictures", "video", "cameras"):
+        sims.add_column(column)
+    for name in SIMULATORS.names():
+        try:
+            cls = simulator_class(name)
+        except BadInput as exc:
+            sims.add_row(name, f"cannot load: {exc}", "", "", "")
+            continue
+        sims.add_row(name, ", ".join(option_names(cls)), _yes(cls.supports_pictures),
+                     _yes(cls.supports_video), ", ".join(cls.cameras) or "-")
+    console.print(sims)
+
+
+def _yes(flag: bool) -> str:
+    return "yes" if flag else "no"
