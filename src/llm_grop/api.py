@@ -16,13 +16,12 @@ from llm_grop.arrangement.pipeline import (  # noqa: F401 - ArrangeOptions: publ
 )
 from llm_grop.arrangement.stated import check_stated
 from llm_grop.assembly import (
-    Bases,
+    RunInputs,
     arrange_options,
     call_log,
-    check_backend,
     execution_policy,
-    make_backend,
     make_simulator,
+    named_simulator,
     planner_options,
     sampling,
     settle,
@@ -111,7 +110,7 @@ def understand(request: str | None = None, settings: RunSettings | None = None, 
     against ``table`` when given.
     """
     refuse = llm is None
-    job = _Job.of(settings, None if refuse or llm is _SETTINGS_LLM else llm, None, overrides)
+    job = RunInputs.of(settings, None if refuse or llm is _SETTINGS_LLM else llm, None, overrides)
     log: CallLog | Callable[[], CallLog] | None = None
     if not refuse:
         log = job.llm if isinstance(job.llm, CallLog) or callable(job.llm) and \
@@ -159,7 +158,7 @@ def arrange(request: str | None = None, settings: RunSettings | None = None, *,
     """
     if table is not None:
         overrides["table"] = table
-    job = _Job.of(settings, llm, None, overrides | {"record": record})
+    job = RunInputs.of(settings, llm, None, overrides | {"record": record})
     s = job.settings
     catalog = catalog or Catalog.load(s.catalog_files)
     options = arrange_options(s, job.bases.arrange)
@@ -185,9 +184,9 @@ def run(request: str | None = None, settings: RunSettings | None = None, *,
     :class:`~llm_grop.simulation.mujoco.simulator.MujocoSimulator` recording a video; the
     plan is the same whichever executes it). The same settings give the same run.
     """
-    simulator, overrides = _named_simulator(simulator, overrides)
+    simulator, overrides = named_simulator(simulator, overrides)
     execution = overrides.pop("execution", None)
-    job = _Job.of(settings, llm, scene, overrides)
+    job = RunInputs.of(settings, llm, scene, overrides)
     sim = simulator if simulator is not None else make_simulator(job.settings)
     planned = _plan(request, job, catalog, on_event, sim.check)
     return execute(planned, simulator=sim, execution=execution)
@@ -223,52 +222,11 @@ def plan(request: str | None = None, settings: RunSettings | None = None, *,
     the episode before any work (a simulator's own check). :func:`execute` runs the plan.
     """
     overrides.pop("execution", None)  # the executive's: execute() takes it
-    job = _Job.of(settings, llm, scene, overrides)
+    job = RunInputs.of(settings, llm, scene, overrides)
     return _plan(request, job, catalog, on_event, check, arrangement)
 
 
-@dataclass(frozen=True)
-class _Job:
-    """A run's settings record and what the caller gave besides: component records whole,
-    an LLM object, a scene object, a table with seats, other tasks, a record file."""
-
-    settings: RunSettings
-    bases: Bases
-    llm: LLM | CallLog | None = None
-    scene: Scene | None = None
-    table: Table | None = None
-    tasks: Mapping[int, Task] | None = None
-    record: str | PathLike[str] | None = None
-
-    @classmethod
-    def of(cls, settings: RunSettings | None, llm: Any, scene: Any,
-           overrides: dict[str, Any]) -> _Job:
-        """The job ``settings`` with ``overrides`` describe (objects apart)."""
-        llm, overrides = _named_llm(llm, overrides)
-        scene, overrides = _named_scene(scene, overrides)
-        tasks = overrides.pop("tasks", None)
-        record = overrides.pop("record", None)
-        table = overrides.get("table")
-        if isinstance(table, Table):
-            overrides["table"] = table.text
-        else:
-            table = None
-        s, bases = settle(settings, overrides)
-        if table is None and s.table is not None:
-            table = Table.parse(s.table)
-        return cls(s, bases, llm, scene, table, tasks, record)
-
-    def log(self) -> CallLog:
-        """A fresh call log over the job's LLM (built now when it is a backend's name)."""
-        if isinstance(self.llm, CallLog):
-            return self.llm
-        check_backend(self.settings)
-        backend = self.llm if self.llm is not None else make_backend(self.settings,
-                                                                     self.bases.backend)
-        return call_log(backend, record=self.record, cache=self.settings.cache)
-
-
-def _plan(request: str | None, job: _Job, catalog: Catalog | None,
+def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
           on_event: Callable[[str], None] | None,
           check: Callable[[Scene, Sequence[Item]], None] | None,
           arrangement: Arrangement | None = None) -> PlanResult:
@@ -343,46 +301,13 @@ def execute(planned: PlanResult, settings: RunSettings | None = None, *,
     """
     from llm_grop.methods.episode import execute_episode
 
-    simulator, overrides = _named_simulator(simulator, overrides)
+    simulator, overrides = named_simulator(simulator, overrides)
     s, bases = settle(settings or planned.settings, overrides)
     sim = simulator if simulator is not None else make_simulator(s)
     return execute_episode(planned.planned, planned.input, task=planned.task, simulator=sim,
                            method=planned.method, attempts=planned.manip_attempts,
                            planner=planned.planner,
                            policy=execution_policy(s, bases.execution))
-
-
-def _named_llm(llm: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-    """``llm`` as an object (``None``: the record's backend); a name given as ``llm`` is
-    the ``llm`` setting."""
-    overrides = dict(overrides)
-    given = overrides.pop("llm", None) if llm is None else None
-    if isinstance(llm, str):
-        overrides["llm"], llm = llm, None
-    elif given is not None and not isinstance(given, str):
-        llm = given
-    elif given is not None:
-        overrides["llm"] = given
-    return llm, overrides
-
-
-def _named_simulator(simulator: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-    """``simulator`` as an object (``None``: the record's); a name is the setting."""
-    overrides = dict(overrides)
-    if isinstance(simulator, str):
-        overrides["simulator"], simulator = simulator, None
-    return simulator, overrides
-
-
-def _named_scene(scene: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-    """``scene`` as a :class:`Scene` (``None``: the record's file); a path is the
-    setting."""
-    overrides = dict(overrides)
-    given = overrides.pop("scene", None)
-    scene = scene if scene is not None else given
-    if scene is not None and not isinstance(scene, Scene):
-        overrides["scene"], scene = str(scene), None
-    return scene, overrides
 
 
 #: A trailing instance number: "dinner fork 2" is of kind "dinner fork".

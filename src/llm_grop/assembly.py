@@ -13,6 +13,7 @@ What the settings record holds always comes from the record.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from os import PathLike
 from pathlib import Path
@@ -25,6 +26,9 @@ from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import BACKENDS, create_llm
 from llm_grop.planning.utility import GropOptions
 from llm_grop.settings import DEFAULTS, RunSettings
+from llm_grop.world.scene import Scene
+from llm_grop.world.table import Table
+from llm_grop.world.tasks import Task
 
 if TYPE_CHECKING:
     from llm_grop.simulation.base import Simulator
@@ -170,3 +174,77 @@ def make_simulator(s: RunSettings) -> Simulator:
 
     return create_simulator(s.simulator, dict(s.sim_options), grasp=s.grasp, truth=s.truth)
 
+
+def named_llm(llm: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``llm`` as an object (``None``: the record's backend); a name given as ``llm`` is
+    the ``llm`` setting."""
+    overrides = dict(overrides)
+    given = overrides.pop("llm", None) if llm is None else None
+    if isinstance(llm, str):
+        overrides["llm"], llm = llm, None
+    elif given is not None and not isinstance(given, str):
+        llm = given
+    elif given is not None:
+        overrides["llm"] = given
+    return llm, overrides
+
+
+def named_simulator(simulator: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``simulator`` as an object (``None``: the record's); a name is the setting."""
+    overrides = dict(overrides)
+    if isinstance(simulator, str):
+        overrides["simulator"], simulator = simulator, None
+    return simulator, overrides
+
+
+def named_scene(scene: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
+    """``scene`` as a :class:`Scene` (``None``: the record's file); a path is the
+    setting."""
+    overrides = dict(overrides)
+    given = overrides.pop("scene", None)
+    scene = scene if scene is not None else given
+    if scene is not None and not isinstance(scene, Scene):
+        overrides["scene"], scene = str(scene), None
+    return scene, overrides
+
+
+@dataclass(frozen=True)
+class RunInputs:
+    """What a caller of the API gave for one run: the settings record (with the overrides
+    applied), and besides it component records whole, an LLM object, a scene object, a
+    table with seats, other tasks, a file to record the LLM's calls to."""
+
+    settings: RunSettings
+    bases: Bases
+    llm: LLM | CallLog | None = None
+    scene: Scene | None = None
+    table: Table | None = None
+    tasks: Mapping[int, Task] | None = None
+    record: str | PathLike[str] | None = None
+
+    @classmethod
+    def of(cls, settings: RunSettings | None, llm: Any, scene: Any,
+           overrides: dict[str, Any]) -> RunInputs:
+        """The job ``settings`` with ``overrides`` describe (objects apart)."""
+        llm, overrides = named_llm(llm, overrides)
+        scene, overrides = named_scene(scene, overrides)
+        tasks = overrides.pop("tasks", None)
+        record = overrides.pop("record", None)
+        table = overrides.get("table")
+        if isinstance(table, Table):
+            overrides["table"] = table.text
+        else:
+            table = None
+        s, bases = settle(settings, overrides)
+        if table is None and s.table is not None:
+            table = Table.parse(s.table)
+        return cls(s, bases, llm, scene, table, tasks, record)
+
+    def log(self) -> CallLog:
+        """A fresh call log over the job's LLM (built now when it is a backend's name)."""
+        if isinstance(self.llm, CallLog):
+            return self.llm
+        check_backend(self.settings)
+        backend = self.llm if self.llm is not None else make_backend(self.settings,
+                                                                     self.bases.backend)
+        return call_log(backend, record=self.record, cache=self.settings.cache)

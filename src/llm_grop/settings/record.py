@@ -1,31 +1,9 @@
-"""The one settings record of a run: every option that shapes it, written once.
-
-:class:`RunSettings` holds what a run is given besides its request: the paper's task or a
-request's objects, the method, the scene, chairs and table, the seed, the arrangement's
-options (M, Template 1's prompts, preferences), the planner's weights and belief, the
-simulator, the LLM and its sampling, the executive's attempt counts and the LLM cache.
-Each field's default, unit, bounds and help text are written here and nowhere else; the
-front doors are views of it:
-
-- the Python API (:func:`llm_grop.api.run` and friends) takes a record, or keyword
-  overrides named as its fields (``m=10``);
-- the command line's flags are generated from the fields (:mod:`llm_grop.cli.settings`);
-- a sweep file's keys and the service's JSON bodies name the same fields;
-- a bench's ``experiment.json`` and trial rows use the same names.
-
-A bad value is one :class:`~llm_grop.errors.BadInput` naming the field (``param``); each
-front door words that name its own way through :func:`label` (``--configurations``,
-``m:`` in a sweep file, ``"m"`` in JSON, ``m=`` in Python), from the field's metadata
-here, not from a table kept by hand.
-
-This module imports nothing from the package but :mod:`llm_grop.errors`, so every layer
-may read its defaults (:data:`DEFAULTS`).
-"""
+"""The settings record itself: :class:`RunSettings`, its fields' metadata (:class:`Door`,
+:func:`setting`) and :data:`DEFAULTS`."""
 
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from typing import Annotated, Any, Literal
@@ -40,7 +18,8 @@ from pydantic import (
     WithJsonSchema,
 )
 
-from llm_grop.errors import BadInput, LLMGropError
+from llm_grop.errors import BadInput
+from llm_grop.settings.reasons import problem, unknown_words
 
 #: The front doors a setting comes through; each names a field its own way.
 Interface = Literal["python", "cli", "sweep", "json"]
@@ -267,11 +246,11 @@ class RunSettings(BaseModel):
         one :class:`BadInput` naming the field (``param``)."""
         unknown = [k for k in values if k not in type(self).model_fields]
         if unknown:
-            raise BadInput(_unknown_words(unknown[0]), param=unknown[0])
+            raise BadInput(unknown_words(unknown[0], type(self).model_fields), param=unknown[0])
         try:
             super().__init__(**_coerced(values))
         except ValidationError as exc:
-            raise _problem(exc) from None
+            raise problem(exc) from None
 
     @classmethod
     def make(cls, values: Mapping[str, Any] | None = None, **more: Any) -> RunSettings:
@@ -289,7 +268,8 @@ class RunSettings(BaseModel):
         """The fields that decide a run's result, by name (not the cache, deadlines or
         retries, which change no answer)."""
         return {name: value for name, value in self.model_dump(mode="json").items()
-                if extra(name).get("identity", True)}
+                if _extra(name).get("identity", True)}
+
 
 
 def _coerced(given: dict[str, Any]) -> dict[str, Any]:
@@ -305,142 +285,12 @@ def _coerced(given: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def _problem(exc: ValidationError) -> BadInput:
-    """The first of pydantic's complaints as a :class:`BadInput` naming the field."""
-    first = exc.errors(include_url=False)[0]
-    loc = first.get("loc", ())
-    name = str(loc[0]) if loc else "settings"
-    given = first.get("input")
-    shown = None if isinstance(given, list | tuple | Mapping) else given
-    return BadInput(first_reason(first), param=name, value=shown)
-
-
-#: What a type error expected, in plain words.
-_EXPECTED = {"int_type": "a whole number", "int_parsing": "a whole number",
-             "int_from_float": "a whole number", "float_type": "a number",
-             "float_parsing": "a number", "string_type": "text", "bool_type": "true or false",
-             "bool_parsing": "true or false", "tuple_type": "a list", "finite_number":
-             "a finite number", "literal_error": "one of {expected}"}
-#: Plain words for a bound that was not kept.
-_BOUNDS = {"greater_than": "must be greater than {gt}", "greater_than_equal":
-           "must be at least {ge}", "less_than": "must be less than {lt}",
-           "less_than_equal": "must be at most {le}", "string_too_short":
-           "must not be empty", "string_too_long": "must be at most {max_length} characters"}
-
-
-def first_reason(error: Mapping[str, Any]) -> str:
-    """One pydantic error in plain words."""
-    kind = error.get("type", "")
-    ctx = dict(error.get("ctx") or {})
-    if kind in _BOUNDS:
-        return _BOUNDS[kind].format(**ctx)
-    if kind in _EXPECTED:
-        return "expected " + _EXPECTED[kind].format(**ctx)
-    return str(error.get("msg", "not valid")).removeprefix("Value error, ")
-
-
-def _unknown_words(name: str) -> str:
-    """What to say of a setting that does not exist, with the nearest names."""
-    import difflib
-
-    near = difflib.get_close_matches(name, list(RunSettings.model_fields), n=3)
-    return "unknown setting" + (f"; did you mean {', '.join(map(repr, near))}?" if near else "")
-
-
-def extra(name: str) -> dict[str, Any]:
+def _extra(name: str) -> dict[str, Any]:
     """The metadata written beside field ``name`` (group, identity, door)."""
     info = RunSettings.model_fields[name]
     return dict(info.json_schema_extra or {})  # type: ignore[arg-type]
 
 
-def door(name: str) -> Door:
-    """How the front doors spell field ``name``."""
-    return Door(**extra(name).get("door", {}))
-
-
-def help_text(name: str) -> str:
-    """Field ``name``'s help, units included."""
-    return RunSettings.model_fields[name].description or ""
-
-
-def fields(group: str | None = None) -> list[str]:
-    """The record's field names (of one ``group``), in their order."""
-    return [n for n in RunSettings.model_fields if group is None or extra(n)["group"] == group]
-
-
-def flag(name: str) -> str:
-    """The command-line flag of field or parameter ``name``: ``m`` -> ``--configurations``,
-    ``guess`` -> ``--no-guess``, anything else ``--name-with-dashes``."""
-    if name in RunSettings.model_fields:
-        d = door(name)
-        if d.negate:
-            return d.negate
-        if d.cli:
-            return d.cli
-    return "--" + name.replace("_", "-")
-
-
-def label(name: str, where: Interface, value: object = None) -> str:
-    """Field or parameter ``name`` (with the ``value`` given for it, when it helps) in the
-    words of the front door ``where``: ``--configurations 0``, ``m`` (a sweep file's
-    key), ``"m"`` (a JSON field) or ``m=0`` (Python)."""
-    field, dot, key = name.partition(".")
-    if dot and field in RunSettings.model_fields and where == "cli":
-        # An entry of a mapping setting: ``--sim-option timestep_s=x``.
-        return f"{flag(field)} {key}" + ("" if value is None else f"={value}")
-    known = name in RunSettings.model_fields
-    d = door(name) if known else Door()
-    if where == "cli":
-        named = flag(name)
-        if value is None or (known and d.negate):
-            return named
-        text = str(value)
-        return f"{named} {text if text and ' ' not in text else repr(text)}"
-    if where == "sweep":
-        return d.sweep or name if value is None else f"{d.sweep or name} {value}"
-    if where == "json":
-        return d.json or name
-    if value is None:
-        return name
-    return f"{name}={value if isinstance(value, int | float) else str(value)!r}"
-
-
-#: A setting a message mentions, spelled as Python's keyword: ``guess=False``, ``chairs=N``.
-_MENTION = re.compile(r"\b([a-z][a-z_]*)=([^\s,;:)]+)")
-#: Python's literals a mention may hold, as JSON spells them.
-_JSON_LITERALS = {"True": "true", "False": "false", "None": "null"}
-
-
-def words(text: str, where: Interface, names: tuple[str, ...] | None = None) -> str:
-    """``text`` (a message or a warning of the API) with each setting it mentions as
-    Python's keyword (``guess=False``) spelled as ``where`` spells it: ``--no-guess``,
-    ``--chairs N``; only ``names`` when given (what an error says it mentions), else any
-    field of the record."""
-    if where == "python":
-        return text
-
-    def one(m: re.Match[str]) -> str:
-        name, value = m.group(1), m.group(2)
-        if name not in RunSettings.model_fields or names is not None and name not in names:
-            return m.group(0)
-        if where == "json":
-            return f'"{label(name, where)}": {_JSON_LITERALS.get(value, value)}'
-        if where == "sweep":
-            return f"{label(name, where)}: {value}"
-        return label(name, where, value)
-
-    return _MENTION.sub(one, text)
-
-
-def in_words(exc: LLMGropError, where: Interface) -> str:
-    """``exc``'s one-line message with its parameter, and the settings it mentions
-    (``exc.mentions``), named as the front door ``where`` names them."""
-    detail = words(exc.detail if exc.param is not None else str(exc), where, exc.mentions)
-    if exc.param is None:
-        return detail
-    shown = exc.value if where != "json" else None
-    return f"{label(exc.param, where, shown)}: {detail}"
-
-
 #: The record as nothing changes it: every default, for components to read theirs from.
 DEFAULTS = RunSettings()
+
