@@ -3,7 +3,7 @@
 Prints the median and p95 over 200 runs of `check` on a realistic consistent
 10-relation answer, and of `minimal_conflict` and `largest_consistent_subset` on
 the paper's inconsistent example (6 lines, minimal conflict {2, 3, 5}).
-Run: .venv/bin/python benchmarks/asp_check.py [--runs N]
+Run: .venv/bin/python benchmarks/asp_check.py [--runs N] [--quick]
 """
 
 from __future__ import annotations
@@ -13,6 +13,8 @@ import math
 import statistics
 import time
 from collections.abc import Callable
+
+from common import parse_args
 
 from llm_grop.arrangement.consistency import check, largest_consistent_subset, minimal_conflict
 from llm_grop.world.relation import Relation
@@ -56,7 +58,7 @@ def _time(fn: Callable[[], object], runs: int) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=200)
-    runs = parser.parse_args().runs
+    runs = parse_args(parser, {"runs": 5}).runs
     # Guard against timing a wrong answer.
     if not check(TEN).consistent:
         raise SystemExit("the 10-relation answer should be consistent")

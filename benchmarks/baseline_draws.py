@@ -6,14 +6,14 @@ GROP and LLM-GROP, and LLM-GROP's over GROP's; episodes with no plan (``Infeasib
 are counted and left out of the means. Issue 24: with the baselines' arrangements drawn
 over the whole top, GROP keeps the most reachable of 25 and LLM-GROP, set at the diner's
 place, looked slow beside it.
-Run: .venv/bin/python benchmarks/baseline_draws.py [--seeds 20]
+Run: .venv/bin/python benchmarks/baseline_draws.py [--seeds 20] [--quick]
 """
 
 from __future__ import annotations
 
 import argparse
 
-from common import mean_se, replay_llm
+from common import mean_se, parse_args, replay_llm
 
 from llm_grop.api import run
 from llm_grop.errors import Infeasible
@@ -40,7 +40,7 @@ def mean_times(method: str, seeds: int) -> tuple[list[float], int]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
-    args = ap.parse_args()
+    args = parse_args(ap, {"seeds": 1})
     means: dict[str, float] = {}
     for method in METHODS:
         times, infeasible = mean_times(method, args.seeds)

@@ -4,7 +4,7 @@ Measures manipulation success against planned reach and navigation success again
 clearance in the 3D world (with its arrival noise), fits the parametric model by maximum
 likelihood, and prints measured rates beside the ``default`` profile's and the fitted
 model's predictions. ``--write`` stores the fit in src/llm_grop/data/feasibility.yaml.
-Run: .venv/bin/python benchmarks/calibrate_mujoco.py [--trials 24] [--write]
+Run: .venv/bin/python benchmarks/calibrate_mujoco.py [--trials 24] [--write] [--quick]
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import re
 import time
 from pathlib import Path
 
+from common import parse_args
 from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
@@ -32,6 +33,8 @@ PROFILES = Path(__file__).resolve().parents[1] / "src/llm_grop/data/feasibility.
 REACHES = [0.40, 0.50, 0.60, 0.70, 0.75, 0.80, 0.85, 0.90, 0.95, 1.00, 1.05, 1.10, 1.15,
            1.20, 1.30]
 CLEARANCES = [0.0, 0.02, 0.04, 0.06, 0.08, 0.10, 0.15, 0.20, 0.30, 0.45]
+#: The reaches and clearances of ``--quick``: three spread over each range.
+QUICK_REACHES, QUICK_CLEARANCES = REACHES[::7], CLEARANCES[::4]
 
 
 def main() -> None:
@@ -39,16 +42,18 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=24, help="episodes per reach and clearance")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--write", action="store_true", help="store the fit as profile mujoco")
-    args = ap.parse_args()
+    args = parse_args(ap, {"trials": 1})
+    reaches, clearances = (QUICK_REACHES, QUICK_CLEARANCES) if args.quick else (
+        REACHES, CLEARANCES)
     sim = MujocoSimulator()
     console = Console()
     t0 = time.perf_counter()
     with Progress(console=console) as progress:
         bar = progress.add_task("manipulation (attempts)", total=None)
-        manip = measure_manipulation(sim, REACHES, args.trials, args.seed,
+        manip = measure_manipulation(sim, reaches, args.trials, args.seed,
                                      on_sample=lambda s: progress.advance(bar))
-        bar = progress.add_task("navigation", total=len(CLEARANCES) * args.trials)
-        nav = measure_navigation(sim, CLEARANCES, args.trials, args.seed,
+        bar = progress.add_task("navigation", total=len(clearances) * args.trials)
+        nav = measure_navigation(sim, clearances, args.trials, args.seed,
                                  on_sample=lambda s: progress.advance(bar))
     fitted = fit(manip, nav)
     default = feasibility_profile("default")

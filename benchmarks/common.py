@@ -1,9 +1,17 @@
-"""Shared set-up for the benchmark scripts: the recorded LLM and summary statistics."""
+"""Shared set-up for the benchmark scripts: the recorded LLM, summary statistics, and the
+``--quick`` mode every script has (a tiny case in seconds, what ``tests/test_benchmarks.py``
+runs so that no script can rot unnoticed)."""
 
 from __future__ import annotations
 
+import argparse
+import contextlib
 import math
 import statistics
+import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 from llm_grop import make_llm
@@ -12,6 +20,13 @@ from llm_grop.llm.base import BackendOptions, CallLog
 #: Embedded-model answers for tasks 1-8 x seeds 0-19 and task 8 x seeds 20-49, written by
 #: benchmarks/record_embedded.py.
 RECORDING = Path(__file__).parent / "data" / "embedded_calls.jsonl"
+
+#: The help text of every script's ``--quick``.
+QUICK_HELP = ("a tiny case in a few seconds, figures printed as usual (what the tests run; "
+              "the figures mean little)")
+
+#: Scratch directories made for quick runs, removed when the process ends.
+_SCRATCH: list[tempfile.TemporaryDirectory[str]] = []
 
 
 def replay_llm() -> CallLog:
@@ -32,3 +47,61 @@ def mean_se(values: list[float]) -> tuple[float, float]:
     if len(values) < 2:
         return (values[0] if values else math.nan), math.nan
     return statistics.fmean(values), statistics.stdev(values) / math.sqrt(len(values))
+
+
+def parse_args(parser: argparse.ArgumentParser, quick: Mapping[str, object] | None = None,
+               argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """``parser``'s arguments, with ``--quick`` added: given it, the values in ``quick``
+    (keyed by each option's ``dest``) replace those options' defaults, so an option given
+    on the command line still wins. A callable value is called for the value, and only in
+    quick mode (a scratch directory is made only when wanted)."""
+    parser.add_argument("--quick", action="store_true", help=QUICK_HELP)
+    args = parser.parse_args(argv)
+    if args.quick and quick:
+        parser.set_defaults(**{k: v() if callable(v) else v for k, v in quick.items()})
+        args = parser.parse_args(argv)
+    return args
+
+
+def scratch(name: str) -> Path:
+    """A fresh directory, removed when the process ends: where a quick run writes what a
+    full run writes into the working tree."""
+    tmp = tempfile.TemporaryDirectory(prefix=f"llm-grop-{name}-")
+    _SCRATCH.append(tmp)
+    return Path(tmp.name)
+
+
+def bench(out: Path, *options: str, methods: str = "tpra,latp,grop,llm-grop",
+          tasks: str = "8", trials: int = 1, workers: int = 1) -> Path:
+    """``llm-grop bench`` into ``out`` with the embedded model's recorded answers replayed,
+    2D and no pictures unless ``options`` say otherwise (they come last, so they win);
+    ``out``."""
+    subprocess.run([sys.executable, "-m", "llm_grop", "bench", "--tasks", tasks, "--trials",
+                    str(trials), "--methods", methods, "--llm", "replay", "--replay",
+                    str(RECORDING), "--workers", str(workers), "--no-images", "--out",
+                    str(out), "-q", *options], check=True)
+    return out
+
+
+@contextlib.contextmanager
+def quick_bench(*options: str, methods: str = "tpra,latp,grop,llm-grop"
+                ) -> Iterator[Path]:
+    """A tiny bench (Task 8, one trial, one worker: see :func:`bench`) in a scratch
+    directory, for the scripts that read bench results, in quick mode."""
+    with tempfile.TemporaryDirectory(prefix="llm-grop-quick-bench-") as tmp:
+        yield bench(Path(tmp) / "bench", *options, methods=methods)
+
+
+@contextlib.contextmanager
+def results_dirs(parser: argparse.ArgumentParser, args: argparse.Namespace, *options: str,
+                 methods: str = "tpra,latp,grop,llm-grop") -> Iterator[list[Path]]:
+    """The bench results directories ``args.dirs`` (a ``nargs="*"`` positional); in quick
+    mode without any, a tiny bench's (:func:`quick_bench`); without any otherwise, the
+    parser's usage error."""
+    if args.dirs:
+        yield args.dirs
+    elif not args.quick:
+        parser.error("the following arguments are required: dirs (or --quick)")
+    else:
+        with quick_bench(*options, methods=methods) as out:
+            yield [out]

@@ -2,24 +2,32 @@
 
 Over the paper's 8 tasks x 3 seeds: the fraction consistent on the first
 attempt, and after re-prompting (within the default 3 attempts). Optionally
-records every call for `--llm replay`.
-Run: .venv/bin/python benchmarks/consistency_rate.py [--record calls.jsonl]
+records every call for `--llm replay`. ``--llm replay`` replays a recording of the model
+instead (by default ``benchmarks/data/embedded_calls.jsonl``; what ``--quick`` does, with
+one seed).
+Run: .venv/bin/python benchmarks/consistency_rate.py [--seeds 3] [--record calls.jsonl]
+     [--llm embedded|replay] [--replay FILE] [--quick]
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
-from llm_grop import arrange, make_llm
+from common import RECORDING, parse_args
+
+from llm_grop import BackendOptions, arrange, make_llm
 from llm_grop.errors import LLMGropError
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--record", default=None)
-    args = ap.parse_args()
-    llm = make_llm("embedded", record=args.record)
+    ap.add_argument("--llm", default="embedded", choices=("embedded", "replay"))
+    ap.add_argument("--replay", type=Path, default=RECORDING, help="the recording to replay")
+    args = parse_args(ap, {"seeds": 1, "llm": "replay"})
+    llm = make_llm(args.llm, BackendOptions(replay_path=args.replay), record=args.record)
     first = after = runs = 0
     for task in range(1, 9):
         for seed in range(args.seeds):

@@ -7,7 +7,7 @@ where that much tableware has room to wait). Prints, per case, the
 planning time (median and max, LLM calls excluded), how many episodes placed every
 object, and the automatic rater's score of each diner's setting (mean per diner, the
 mean of each table's lowest setting).
-Run: .venv/bin/python benchmarks/diners.py [--seeds 10]
+Run: .venv/bin/python benchmarks/diners.py [--seeds 10] [--quick]
 """
 
 from __future__ import annotations
@@ -16,6 +16,8 @@ import argparse
 import statistics
 import time
 from pathlib import Path
+
+from common import parse_args
 
 from llm_grop import BackendOptions, run
 from llm_grop.arrangement.pipeline import ArrangeOptions
@@ -44,7 +46,7 @@ CASES = (
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
-    args = ap.parse_args()
+    args = parse_args(ap, {"seeds": 1})
     options = ArrangeOptions(preference_pool=load_preference_file(DATA / "preferences.yaml"))
     no_calls = BackendOptions(replay_path=str(DATA / "embedded_calls.jsonl"))
     for label, scene, table, request in CASES:

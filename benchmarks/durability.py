@@ -8,11 +8,13 @@
 * ``llm-grop bench`` interrupted (Ctrl-C or SIGTERM) at 20 random moments, start-up
   included: how many printed a traceback, and the exit statuses.
 
-    python benchmarks/durability.py
+    python benchmarks/durability.py [--timeout 3] [--body-mib 50] [--interrupts 20]
+        [--latest 4] [--quick]
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import random
 import signal
@@ -26,7 +28,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
 import httpx
-from common import RECORDING
+from common import RECORDING, parse_args
 
 from llm_grop.errors import LLMUnavailable
 from llm_grop.llm.base import BackendOptions, SamplingParams
@@ -73,12 +75,12 @@ def hostile(mode: str) -> ThreadingHTTPServer:
     return server
 
 
-def llm_calls() -> None:
-    print("LLM calls with --timeout 3 --retries 2 (the openai backend):")
+def llm_calls(timeout_s: float) -> None:
+    print(f"LLM calls with --timeout {timeout_s:g} --retries 2 (the openai backend):")
     for mode in ("trickle", "retry-after", "huge"):
         server = hostile(mode)
         llm = OpenAILLM(BackendOptions(base_url=f"http://127.0.0.1:{server.server_port}/v1",
-                                       timeout_s=3.0, max_retries=2))
+                                       timeout_s=timeout_s, max_retries=2))
         t0 = time.monotonic()
         try:
             llm.complete("hi", SamplingParams(seed=0))
@@ -89,7 +91,7 @@ def llm_calls() -> None:
         server.shutdown()
 
 
-def site_memory() -> None:
+def site_memory(mib: int) -> None:
     sys.path.insert(0, str(Path(__file__).parent))
     from ratings_load import server_process, synthetic_study
 
@@ -106,7 +108,7 @@ def site_memory() -> None:
             before = peak()
 
             def chunks():
-                for _ in range(50):
+                for _ in range(mib):
                     yield b"A" * (1024 * 1024)
 
             try:
@@ -114,17 +116,17 @@ def site_memory() -> None:
                                     headers={"content-type": "application/json"}).status_code
             except httpx.HTTPError as exc:
                 status = type(exc).__name__
-            print(f"rating site, 50 MiB chunked body to /api/session: answer {status}; peak "
+            print(f"rating site, {mib} MiB chunked body to /api/session: answer {status}; peak "
                   f"resident memory {before} MB before, {peak()} MB after")
 
 
-def interrupts(count: int = 20) -> None:
+def interrupts(count: int = 20, latest_s: float = 4.0) -> None:
     rng = random.Random(27)
     codes: Counter = Counter()
     tracebacks = 0
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(count):
-            after = rng.uniform(0.02, 4.0)
+            after = rng.uniform(0.02, latest_s)
             sig = signal.SIGTERM if k % 5 == 4 else signal.SIGINT
             proc = subprocess.Popen(
                 [sys.executable, "-m", "llm_grop", "bench", "--tasks", "1", "--trials", "2",
@@ -136,11 +138,22 @@ def interrupts(count: int = 20) -> None:
             _, err = proc.communicate(timeout=120)
             tracebacks += b"Traceback" in err
             codes[(sig.name, proc.returncode)] += 1
-    print(f"bench interrupted at {count} random moments (0-4 s): {tracebacks} printed a "
-          f"traceback; exit statuses {dict(codes)}")
+    print(f"bench interrupted at {count} random moments (0-{latest_s:g} s): {tracebacks} "
+          f"printed a traceback; exit statuses {dict(codes)}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--timeout", type=float, default=3.0, help="the LLM calls' timeout, s")
+    ap.add_argument("--body-mib", type=int, default=50, help="the body sent to the site, MiB")
+    ap.add_argument("--interrupts", type=int, default=20, help="benches interrupted")
+    ap.add_argument("--latest", type=float, default=4.0,
+                    help="the latest moment a bench is interrupted, s after its start")
+    args = parse_args(ap, {"timeout": 0.5, "body_mib": 2, "interrupts": 2, "latest": 1.0})
+    llm_calls(args.timeout)
+    site_memory(args.body_mib)
+    interrupts(args.interrupts, args.latest)
 
 
 if __name__ == "__main__":
-    llm_calls()
-    site_memory()
-    interrupts()
+    main()

@@ -3,6 +3,7 @@
 Every method runs the same 50 seeds (the same scenes and chairs); LLM methods replay the
 embedded model's recorded answers. Success = every object reached the table.
 Run: .venv/bin/python benchmarks/episode_success.py [--seeds 50] [--methods llm-grop,...]
+     [--quick]
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import argparse
 import statistics
 
-from common import mean_se, replay_llm
+from common import mean_se, parse_args, replay_llm
 
 from llm_grop.api import run
 from llm_grop.errors import Infeasible
@@ -21,7 +22,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=50)
     ap.add_argument("--methods", default="llm-grop")
     ap.add_argument("--chairs", default="1,4")
-    args = ap.parse_args()
+    args = parse_args(ap, {"seeds": 1, "chairs": "1"})
     llm = replay_llm()
     for chairs in (int(c) for c in args.chairs.split(",")):
         for method in args.methods.split(","):

@@ -14,6 +14,7 @@ success, failures by reason, re-grasps and re-places.
 
 Run: .venv/bin/python benchmarks/executive.py lines --before 26cf4ac
      .venv/bin/python benchmarks/executive.py results bench-3d-vs-2d/kinematic2d ...
+     .venv/bin/python benchmarks/executive.py --quick   (both: results of a tiny bench)
 """
 
 from __future__ import annotations
@@ -28,7 +29,11 @@ from collections import Counter, defaultdict
 from pathlib import Path
 from typing import Any
 
+from common import parse_args, results_dirs
+
 ROOT = Path(__file__).resolve().parents[1]
+#: The last revision before the executive.
+BEFORE_REV = "26cf4ac"
 #: Where each simulator's copy of the execution logic lived before the executive:
 #: ``(file, top-level names)``, an empty tuple for the whole file.
 BEFORE = (("src/llm_grop/simulation/kinematic2d.py", ("Kinematic2D.execute", "Run")),
@@ -79,6 +84,9 @@ def code_lines(source: str, names: tuple[str, ...]) -> int:
 
 
 def lines(before: str) -> None:
+    if subprocess.run(["git", "cat-file", "-e", f"{before}^{{commit}}"], cwd=ROOT,
+                      capture_output=True).returncode != 0:
+        raise SystemExit(f"lines: revision {before} is not in this clone (a shallow one?)")
     old = sum(code_lines(_show(before, path), names) for path, names in BEFORE)
     new = sum(code_lines((ROOT / path).read_text(), names) for path, names in AFTER)
     print(f"lines of execution logic: {old} at {before} (two copies, one per simulator), "
@@ -140,7 +148,7 @@ def results(dirs: list[Path]) -> None:
                         reasons[s.get("reason") or "(none)"] += 1
                 g, dist, back = _regrasps_and_replaces(r["steps"])
                 extra.update(regrasps=g, disturbed=dist, put_back=back,
-                             false_successes=_false_success(r))
+                             false_successes=int(_false_success(r)))
             totals.update(extra)
             n = len(rs)
             per = ", ".join(f"{k} {v / n:.2f}" for k, v in reasons.most_common())
@@ -157,14 +165,23 @@ def results(dirs: list[Path]) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    sub = ap.add_subparsers(dest="what", required=True)
-    sub.add_parser("lines").add_argument("--before", default="26cf4ac")
-    sub.add_parser("results").add_argument("dirs", nargs="+", type=Path)
-    args = ap.parse_args()
+    sub = ap.add_subparsers(dest="what")
+    sub.add_parser("lines").add_argument("--before", default=BEFORE_REV)
+    sub.add_parser("results").add_argument("dirs", nargs="*", type=Path)
+    args = parse_args(ap)
+    if args.quick and args.what is None:  # both figures; the results of a tiny bench
+        try:
+            lines(BEFORE_REV)
+        except SystemExit as exc:
+            print(exc)
+        args.what, args.dirs = "results", []
     if args.what == "lines":
         lines(args.before)
+    elif args.what == "results":
+        with results_dirs(ap, args) as dirs:
+            results(dirs)
     else:
-        results(args.dirs)
+        ap.error("choose lines or results (or --quick)")
 
 
 if __name__ == "__main__":

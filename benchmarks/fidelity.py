@@ -7,6 +7,7 @@ centimetres: median, 95th percentile and maximum of the signed error and of its 
 the share within the sampler's tolerance; then the same gaps as executed, measured
 between the objects where they ended up (the ``final`` arrangement) when both were placed.
 Run: .venv/bin/python benchmarks/fidelity.py bench-preferences [--method llm-grop]
+     .venv/bin/python benchmarks/fidelity.py --quick   (a tiny bench of its own)
 """
 
 from __future__ import annotations
@@ -16,10 +17,14 @@ import json
 from pathlib import Path
 
 import numpy as np
+from common import parse_args, results_dirs
 
 from llm_grop.arrangement.fidelity import GAP_TOLERANCE_M, realised_gap_m
 from llm_grop.arrangement.predicates import Footprint
 from llm_grop.world.arrangement import Placement
+
+#: The preferences of ``--quick``'s bench, which state gaps (as the README's bench does).
+PREFERENCES = Path(__file__).parent / "data" / "preferences.yaml"
 
 
 def errors_cm(path: Path, method: str) -> tuple[list[float], list[float], list[float]]:
@@ -64,17 +69,18 @@ def _line(name: str, values: list[float]) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("dirs", nargs="+", type=Path)
+    ap.add_argument("dirs", nargs="*", type=Path)
     ap.add_argument("--method", default="llm-grop")
-    args = ap.parse_args()
-    for d in args.dirs:
-        gaps, edges, executed = errors_cm(d, args.method)
-        print(f"{d} ({args.method}), planned (the chosen configurations):")
-        print(_line("gaps between objects", gaps))
-        print(_line("distance from the diner's edge", edges))
-        print(_line("all", gaps + edges))
-        print("executed (where the objects ended up):")
-        print(_line("gaps between objects", executed))
+    args = parse_args(ap)
+    with results_dirs(ap, args, "--preferences", str(PREFERENCES), methods=args.method) as dirs:
+        for d in dirs:
+            gaps, edges, executed = errors_cm(d, args.method)
+            print(f"{d} ({args.method}), planned (the chosen configurations):")
+            print(_line("gaps between objects", gaps))
+            print(_line("distance from the diner's edge", edges))
+            print(_line("all", gaps + edges))
+            print("executed (where the objects ended up):")
+            print(_line("gaps between objects", executed))
 
 
 if __name__ == "__main__":

@@ -22,8 +22,10 @@ object kind. ``--write`` stores the fit as the ``mujoco`` profile
 in src/llm_grop/data/feasibility.yaml.
 ``--save FILE`` keeps the measurements; ``--also FILE ...`` fits to earlier runs' too, so
 that a profile can be re-fitted to the plans made with it (the belief moves the plans).
+``--quick``: one LLM-GROP episode with 1 chair in 2D, and the fit.
 Run: .venv/bin/python benchmarks/fit_profile.py [--simulator mujoco] [--seeds 20] [--first-seed 0]
      [--feasibility default] [--truth PROFILE] [--fit] [--write] [--save F] [--also F...]
+     [--quick]
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from common import median_p95, replay_llm
+from common import median_p95, parse_args, replay_llm
 from scipy.optimize import minimize_scalar
 
 from llm_grop.api import run
@@ -277,7 +279,8 @@ def main() -> None:
     ap.add_argument("--save", type=Path, help="write the episodes' measurements here (JSON)")
     ap.add_argument("--also", type=Path, nargs="*", default=[],
                     help="fit also to episodes saved by earlier runs (--save)")
-    args = ap.parse_args()
+    args = parse_args(ap, {"simulator": "kinematic2d", "seeds": 1, "methods": "llm-grop",
+                           "chairs": "1", "workers": 1, "fit": True})
     jobs = [(m, int(c), s, args.simulator, args.feasibility, args.truth)
             for m in args.methods.split(",") for c in args.chairs.split(",")
             for s in range(args.first_seed, args.first_seed + args.seeds)]

@@ -7,7 +7,7 @@ whether the object is still in hand:
 ``carried``; ``missed`` (the grasp did not hold while lifting); ``dropped`` (lost in
 transit); or the pick's other failure. Run it for both grasps; the README's list of what
 ``--grasp friction`` can carry comes from it.
-Run: .venv/bin/python benchmarks/friction_grasp.py [--grasp fix,friction]
+Run: .venv/bin/python benchmarks/friction_grasp.py [--grasp fix,friction] [--kinds K1,K2] [--quick]
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import argparse
 import math
 
 import numpy as np
+from common import parse_args
 
 from llm_grop.errors import BadInput
 from llm_grop.experiment.calibration import room
@@ -49,14 +50,16 @@ def outcome(kind: str, grasp: str, catalog: Catalog) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grasp", default="fix,friction")
-    args = ap.parse_args()
+    ap.add_argument("--kinds", default=None, help="the catalog kinds to try (default: all)")
+    args = parse_args(ap, {"grasp": "fix", "kinds": "dinner fork"})
     catalog = Catalog.load()
+    kinds = args.kinds.split(",") if args.kinds else catalog.names()
     grasps = args.grasp.split(",")
     print("| object | " + " | ".join(grasps) + " |")
     print("| --- | " + " | ".join("---" for _ in grasps) + " |")
     counts = {g: 0 for g in grasps}
     n = 0
-    for kind in catalog.names():
+    for kind in kinds:
         try:
             tableware(item_placement(items_from_names([kind], catalog)[0]))
         except BadInput:

@@ -15,7 +15,7 @@ slowest case (seconds, wall clock, with a preview of its input). Then it times t
 reader on two 1 MB answers (one line of repeated relations; varied lines).
 
 Run: .venv/bin/python benchmarks/fuzz.py [--cases 50000] [--seed 0] [--parser NAME ...]
-     [--max-seconds S]
+     [--max-seconds S] [--answer-bytes 1000000] [--quick]
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fuzz"))
 
+from common import parse_args  # noqa: E402
 from fuzz_inputs import ITEMS, Input  # noqa: E402
 from fuzz_targets import TARGETS, Target, check  # noqa: E402
 
@@ -159,19 +160,19 @@ def _summary(reports: list[Report]) -> None:
               f"{len(r.found)} | {r.slowest_s:.4f} |")
 
 
-def one_megabyte_answers() -> None:
-    """Times the answer reader on 1 MB answers: one line of repeated relations, and varied
-    lines mixing relations, prose and numbering."""
+def one_megabyte_answers(size_bytes: int = 1_000_000) -> None:
+    """Times the answer reader on 1 MB answers (``size_bytes``): one line of repeated
+    relations, and varied lines mixing relations, prose and numbering."""
     catalog = Catalog.load(use_env=False)
     unit = "Place the fork to the left of the plate and the knife to the right. "
-    one_line = (unit * (1_000_000 // len(unit) + 1))[:1_000_000]
+    one_line = (unit * (size_bytes // len(unit) + 1))[:size_bytes]
     rng = random.Random(0)
     names = sorted({it.kind for it in ITEMS})
     relations = ["to the left of", "to the right of", "above", "below", "on top of",
                  "behind", "in front of", "above and to the right of", "slightly left of"]
     lines: list[str] = []
     size = 0
-    while size < 1_000_000:
+    while size < size_bytes:
         k = rng.random()
         if k < 0.5:
             line = (f"{rng.randint(1, 99)}. Place the {rng.choice(names)} "
@@ -183,9 +184,10 @@ def one_megabyte_answers() -> None:
                     f"{rng.choice(names)} {rng.choice(relations)} the {rng.choice(names)}.")
         lines.append(line)
         size += len(line) + 1
-    varied = "\n".join(lines)[:1_000_000]
+    varied = "\n".join(lines)[:size_bytes]
     print()
-    for label, text in (("1 MB answer, one line", one_line), ("1 MB answer, varied lines", varied)):
+    mb = f"{size_bytes / 1e6:g} MB answer"
+    for label, text in ((f"{mb}, one line", one_line), (f"{mb}, varied lines", varied)):
         start = time.perf_counter()
         parsed = parse_relations(text, ITEMS, catalog)
         elapsed = time.perf_counter() - start
@@ -202,7 +204,9 @@ def main() -> None:
                     help="A parser to fuzz (repeatable); all when not given.")
     ap.add_argument("--max-seconds", type=float, default=600.0,
                     help="Most seconds per parser (fewer cases are run when it is reached).")
-    args = ap.parse_args()
+    ap.add_argument("--answer-bytes", type=int, default=1_000_000,
+                    help="Size of the long answers the reader is timed on.")
+    args = parse_args(ap, {"cases": 100, "answer_bytes": 20_000})
     reports = []
     for name in args.parser or list(TARGETS):
         report = fuzz(TARGETS[name], args.cases, args.seed, args.max_seconds)
@@ -210,7 +214,7 @@ def main() -> None:
         reports.append(report)
     _summary(reports)
     if args.parser is None or "answer" in args.parser:
-        one_megabyte_answers()
+        one_megabyte_answers(args.answer_bytes)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ the arrows that must never exist, followed through every chain of imports; a bro
 contract lists the chains it found), and the modules with the most lines. Its exit status
 is import-linter's: 0 when every contract is kept.
 
-Run: .venv/bin/python benchmarks/layers.py [--largest 10] [--config .importlinter]
+Run: .venv/bin/python benchmarks/layers.py [--largest 10] [--config .importlinter] [--quick]
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from collections import defaultdict
 from pathlib import Path
 
 import grimp
+from common import parse_args
 from importlinter.cli import lint_imports
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,7 +44,7 @@ def main() -> int:
     ap.add_argument("--largest", type=int, default=10, help="How many modules to list.")
     ap.add_argument("--config", type=Path, default=ROOT / ".importlinter",
                     help="The import-linter contracts to check.")
-    args = ap.parse_args()
+    args = parse_args(ap, {"largest": 3})
     sys.path.insert(0, str(SRC.parent))  # this checkout's package, whatever is installed
     graph = package_graph()
     print("Import graph between packages:")

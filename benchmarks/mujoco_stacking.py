@@ -4,12 +4,14 @@ For each pair, a plan puts the support at a random spot on the dining table and 
 object on it (as an arrangement's "on top of" relation would), in the packaged dining room
 with one chair and the authors' arrival noise; success = the settled top object rests on
 its support by contact.
-Run: .venv/bin/python benchmarks/mujoco_stacking.py [--seeds 20]
+Run: .venv/bin/python benchmarks/mujoco_stacking.py [--seeds 20] [--pairs 3] [--quick]
 """
 
 from __future__ import annotations
 
 import argparse
+
+from common import parse_args
 
 from llm_grop import seeds
 from llm_grop.execution import execute
@@ -29,11 +31,12 @@ PAIRS = (("mug lid", "mug"), ("mug", "mug mat"), ("bread", "bread plate"))
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
-    args = ap.parse_args()
+    ap.add_argument("--pairs", type=int, default=len(PAIRS), help="the first N pairs")
+    args = parse_args(ap, {"seeds": 1, "pairs": 1})
     catalog = Catalog.load()
     room = load_scene(None)
     sim = MujocoSimulator()
-    for top, support in PAIRS:
+    for top, support in PAIRS[:args.pairs]:
         items = items_from_names([support, top], catalog)
         stacked = placed = 0
         for seed in range(args.seeds):

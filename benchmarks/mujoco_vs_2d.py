@@ -4,19 +4,17 @@ Runs `llm-grop bench --tasks 8` once per simulator (the embedded model's recorde
 answers, 2 workers, no pictures) into DIR/kinematic2d and DIR/mujoco, resuming what is
 already there, and prints success, execution time and rating side by side.
 Run: .venv/bin/python benchmarks/mujoco_vs_2d.py [--trials 20] [--out DIR]
-     [--feasibility default]
+     [--feasibility default] [--tasks 8] [--methods tpra,latp,grop,llm-grop] [--quick]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import subprocess
-import sys
 import time
 from pathlib import Path
 
-from common import RECORDING
+from common import bench, parse_args, scratch
 
 METHODS = ("tpra", "latp", "grop", "llm-grop")
 
@@ -27,22 +25,22 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("bench-3d-vs-2d"))
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--feasibility", default="default")
-    args = ap.parse_args()
+    ap.add_argument("--tasks", default="8")
+    ap.add_argument("--methods", default=",".join(METHODS))
+    args = parse_args(ap, {"trials": 1, "tasks": "1", "methods": "llm-grop", "workers": 1,
+                           "out": lambda: scratch("mujoco-vs-2d")})
     summaries = {}
     for sim in ("kinematic2d", "mujoco"):
         out = args.out / (sim if args.feasibility == "default" else f"{sim}-{args.feasibility}")
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "llm_grop", "bench", "--tasks", "8", "--trials",
-                        str(args.trials), "--methods", ",".join(METHODS), "--llm", "replay",
-                        "--replay", str(RECORDING), "--workers", str(args.workers),
-                        "--simulator", sim, "--feasibility", args.feasibility,
-                        "--no-images", "--out", str(out), "-q"], check=True)
+        bench(out, "--simulator", sim, "--feasibility", args.feasibility, tasks=args.tasks,
+              trials=args.trials, methods=args.methods, workers=args.workers)
         print(f"{sim}: {time.perf_counter() - t0:.0f} s wall")
         summaries[sim] = json.loads((out / "summary.json").read_text())
-    print(f"\nTask 8 x {args.trials} trials, feasibility {args.feasibility}")
+    print(f"\nTask {args.tasks} x {args.trials} trials, feasibility {args.feasibility}")
     print(f"{'method':<10} {'success 2D':>10} {'success 3D':>10} {'time 2D (s)':>12} "
           f"{'time 3D (s)':>12} {'rating 2D':>10} {'rating 3D':>10}")
-    for m in METHODS:
+    for m in args.methods.split(","):
         a, b = (_method(summaries[s], m) for s in ("kinematic2d", "mujoco"))
         print(f"{m:<10} {a['success_rate']['mean']:>10.2f} {b['success_rate']['mean']:>10.2f} "
               f"{a['execution_time_s']['mean']:>12.1f} {b['execution_time_s']['mean']:>12.1f} "

@@ -14,7 +14,7 @@ all positions, for each order, covers the whole product space exactly. Two optim
 * *failure-free fastest*: least duration when nothing fails (``p`` ignored).
 Each plan gets OMPL paths and is executed ``--executions`` times by the simulator with the
 same seeds (paired); the figure is the mean simulated execution time, seconds.
-Run: .venv/bin/python benchmarks/optimality.py [--seeds 10]
+Run: .venv/bin/python benchmarks/optimality.py [--seeds 10] [--executions 50] [--quick]
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import statistics
 from dataclasses import replace
 
 import numpy as np
-from common import replay_llm
+from common import parse_args, replay_llm
 
 from llm_grop import seeds
 from llm_grop.api import resolve_items, run
@@ -93,7 +93,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--executions", type=int, default=50)
-    args = ap.parse_args()
+    args = parse_args(ap, {"seeds": 1, "executions": 2})
     llm = replay_llm()
     items = resolve_items(None, 7, Catalog.load())[1]
     gaps_opt, gaps_fast = [], []

@@ -10,6 +10,7 @@ LLM's relations (``--preferences``):
 * LLM-GROP rates at least 4.5, above LATP and GROP;
 * LLM-GROP executes faster than LATP, and within 3 % of GROP's execution time.
 Run: .venv/bin/python benchmarks/paper_claims.py bench-replay [bench-preferences ...]
+     .venv/bin/python benchmarks/paper_claims.py --quick   (a tiny bench of its own)
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+
+from common import parse_args, results_dirs
 
 #: "About as fast": mean execution times within this fraction of each other.
 ABOUT_AS_FAST = 0.10
@@ -55,14 +58,15 @@ def claims(summary: dict) -> list[tuple[str, bool, str]]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("dirs", nargs="+", type=Path)
-    args = ap.parse_args()
-    for d in args.dirs:
-        summary = json.loads((d / "summary.json").read_text())
-        print(f"{d}:")
-        print((d / "summary.md").read_text().rstrip())
-        for claim, holds, evidence in claims(summary):
-            print(f"  {claim}: {'holds' if holds else 'does not hold'} ({evidence})")
+    ap.add_argument("dirs", nargs="*", type=Path)
+    args = parse_args(ap)
+    with results_dirs(ap, args) as dirs:
+        for d in dirs:
+            summary = json.loads((d / "summary.json").read_text())
+            print(f"{d}:")
+            print((d / "summary.md").read_text().rstrip())
+            for claim, holds, evidence in claims(summary):
+                print(f"  {claim}: {'holds' if holds else 'does not hold'} ({evidence})")
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ Run: .venv/bin/python benchmarks/phrasings.py --llm embedded \
         --record benchmarks/data/phrasings_embedded.jsonl
      .venv/bin/python benchmarks/phrasings.py --llm replay \
         --replay benchmarks/data/phrasings_embedded.jsonl
+     .venv/bin/python benchmarks/phrasings.py --quick   (the replay; (b) and (c) on a few phrasings)
 """
 
 from __future__ import annotations
@@ -35,10 +36,12 @@ from http.server import ThreadingHTTPServer
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The embedded model's readings of the corpus, recorded (what ``--quick`` replays).
+RECORDED = ROOT / "benchmarks" / "data" / "phrasings_embedded.jsonl"
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "tests" / "language"))
 
-from common import median_p95  # noqa: E402
+from common import median_p95, parse_args  # noqa: E402
 from corpus import Case, as_answer, load_cases, load_refusals, same  # noqa: E402
 
 from conftest import ChatServer, _handler  # noqa: E402
@@ -151,8 +154,9 @@ def main() -> None:
     parser.add_argument("--replay", type=Path)
     parser.add_argument("--record", type=Path)
     parser.add_argument("--limit", type=int, help="Read only the first N phrasings in (c).")
+    parser.add_argument("--served", type=int, help="Read only the first N phrasings in (b).")
     parser.add_argument("-v", "--verbose", action="store_true")
-    args = parser.parse_args()
+    args = parse_args(parser, {"llm": "replay", "replay": RECORDED, "limit": 5, "served": 10})
     if args.record is not None and args.record.exists():
         args.record.unlink()  # a fresh recording of this run's calls
     catalog = Catalog.load(use_env=False)
@@ -160,8 +164,9 @@ def main() -> None:
     n = len(cases)
     print(f"corpus: {n} phrasings, {len(load_refusals())} refusals")
     _table("(a) fast path", fast_path(cases, catalog), n)
-    _table("(b) LLM path, a server answering each expected reading", answered(cases, catalog),
-           n)
+    served = cases[:args.served] if args.served else cases
+    _table("(b) LLM path, a server answering each expected reading", answered(served, catalog),
+           len(served))
     llm = make_llm(args.llm, BackendOptions(replay_path=args.replay), record=args.record)
     read = cases[:args.limit] if args.limit else cases
     alone, system, latency, wall = model(read, catalog, llm, args.verbose)

@@ -5,7 +5,7 @@
 * 10 and 20 objects, GROP (random arrangements, no LLM), M = 25, on a 1.8 x 0.9 m table.
 Planning time covers sampling the M configurations, the standing positions, the cost-to-go
 fields, utility over all configurations, the object order and the OMPL paths.
-Run: .venv/bin/python benchmarks/planning_time.py [--seeds 20]
+Run: .venv/bin/python benchmarks/planning_time.py [--seeds 20] [--quick]
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
-from common import median_p95, replay_llm
+from common import median_p95, parse_args, replay_llm
 
 from llm_grop.api import run
 from llm_grop.world.scene_file import load_scene
@@ -37,7 +37,7 @@ def _big_table_scene():  # type: ignore[no-untyped-def]
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
-    args = ap.parse_args()
+    args = parse_args(ap, {"seeds": 1})
     llm = replay_llm()
     times = []
     for seed in range(args.seeds):

@@ -5,6 +5,7 @@ probability that every action succeeds at its first attempt (the plan's `feasibi
 against the fraction of trials that had no failed attempt, and the plan's expected
 duration against the measured execution time (seconds).
 Run: .venv/bin/python benchmarks/predicted_vs_measured.py DIR [DIR ...]
+     .venv/bin/python benchmarks/predicted_vs_measured.py --quick   (a tiny bench of its own)
 """
 
 from __future__ import annotations
@@ -15,14 +16,22 @@ import statistics
 from collections import defaultdict
 from pathlib import Path
 
+from common import parse_args, results_dirs
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("dirs", nargs="+", type=Path)
-    args = ap.parse_args()
+    ap.add_argument("dirs", nargs="*", type=Path)
+    args = parse_args(ap)
+    with results_dirs(ap, args) as dirs:
+        report(dirs)
+
+
+def report(dirs: list[Path]) -> None:
+    """The table, one row per results directory and method."""
     print(f"{'results':<28} {'method':<9} {'trials':>6} {'P(no failure)':>14} "
           f"{'measured':>9} {'expected s':>11} {'measured s':>11}")
-    for d in args.dirs:
+    for d in dirs:
         rows = [json.loads(line) for line in (d / "trials.jsonl").read_text().splitlines()
                 if line.strip()]
         by_method: dict[str, list[dict]] = defaultdict(list)

@@ -5,7 +5,7 @@ before the rater) and rates every file with :func:`llm_grop.evaluation.rate`. Pr
 the exact agreement, the within-one agreement, a confusion table (human rows x
 rater columns), and every disagreement with the rater's failed checks.
 
-    python benchmarks/rater_agreement.py [--labelled DIR]
+    python benchmarks/rater_agreement.py [--labelled DIR] [--quick]
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from collections import Counter
 from pathlib import Path
 
 import yaml
+from common import parse_args
 
 from llm_grop.evaluation import rate
 
@@ -27,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--labelled", type=Path, default=LABELLED,
                         help="folder with labels.yaml and the arrangement JSON files")
-    args = parser.parse_args(argv)
+    args = parse_args(parser, argv=argv)  # --quick: the same, it takes seconds
     labels = yaml.safe_load((args.labelled / "labels.yaml").read_text(encoding="utf-8"))
     rows = []
     for name, label in labels["labels"].items():

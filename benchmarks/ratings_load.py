@@ -7,6 +7,7 @@ ratings per second, the latency of a rating (median, p95, max) and of fetching t
 picture, and how many ratings the database holds: each must be stored exactly once.
 
     python benchmarks/ratings_load.py [--raters 20] [--ratings 2000] [--timeout 120]
+        [--quick]
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import httpx
+from common import parse_args
 from PIL import Image
 
 from llm_grop.ratings.study import StudyItem, create_study, invite
@@ -173,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--raters", type=int, default=20)
     parser.add_argument("--ratings", type=int, default=2000, help="ratings in all")
     parser.add_argument("--timeout", type=float, default=120.0, help="time limit, seconds")
-    args = parser.parse_args(argv)
+    args = parse_args(parser, {"raters": 2, "ratings": 6}, argv)
     per_rater = math.ceil(args.ratings / args.raters)
     with tempfile.TemporaryDirectory() as tmp:
         db = Path(tmp) / "study.db"

@@ -14,7 +14,10 @@ every LLM answer replayed from the embedded model's recording
 
 It prints each table in the README's layout (mean ± standard error, every figure from the
 automatic rater where it is a rating), then the executive's figures of the 3D run.
-Run: .venv/bin/python benchmarks/readme_figures.py [--out DIR] [--only 2d,3d,...]
+``--quick`` runs ``2d`` and ``chairs4`` on Task 8 with one trial, one worker, in a scratch
+directory.
+Run: .venv/bin/python benchmarks/readme_figures.py [--out DIR] [--only 2d,3d,...] [--workers 2]
+     [--quick]
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ import time
 from importlib import metadata
 from pathlib import Path
 
-from common import RECORDING
+from common import RECORDING, parse_args, scratch
 
 HERE = Path(__file__).parent
 PREFERENCES = HERE / "data" / "preferences.yaml"
@@ -44,17 +47,23 @@ BENCHES: dict[str, list[str]] = {
 METHODS = ("tpra", "latp", "grop", "llm-grop")
 
 
-def bench(name: str, out: Path) -> tuple[dict, float]:
-    """Run (or resume) bench ``name`` into ``out/name``; its summary and wall seconds."""
+def bench(name: str, out: Path, workers: int = 2, quick: bool = False) -> tuple[dict, float]:
+    """Run (or resume) bench ``name`` into ``out/name`` (with ``quick``, on Task 8 with one
+    trial); its summary and wall seconds."""
+    options = list(BENCHES[name])
+    if quick:
+        for flag, value in (("--tasks", "8"), ("--trials", "1")):
+            options[options.index(flag) + 1] = value
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "llm_grop", "bench", *BENCHES[name], "--llm", "replay",
-                    "--replay", str(RECORDING), "--workers", "2", "--no-images",
+    subprocess.run([sys.executable, "-m", "llm_grop", "bench", *options, "--llm", "replay",
+                    "--replay", str(RECORDING), "--workers", str(workers), "--no-images",
                     "--out", str(out / name), "-q"], check=True)
     return json.loads((out / name / "summary.json").read_text()), time.perf_counter() - t0
 
 
 def _cell(m: dict, key: str, digits: int) -> str:
-    return f"{m[key]['mean']:.{digits}f} ± {m[key]['se']:.{digits}f}"
+    se = m[key]["se"]  # None for a single trial
+    return f"{m[key]['mean']:.{digits}f} ± {'-' if se is None else f'{se:.{digits}f}'}"
 
 
 def table(summaries: dict[str, dict], columns: list[tuple[str, str]]) -> None:
@@ -80,14 +89,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("readme-figures"))
     ap.add_argument("--only", default=",".join(BENCHES))
-    args = ap.parse_args()
+    ap.add_argument("--workers", type=int, default=2)
+    args = parse_args(ap, {"out": lambda: scratch("readme-figures"), "only": "2d,chairs4",
+                           "workers": 1})
     names = [n for n in args.only.split(",") if n]
     unknown = set(names) - set(BENCHES)
     if unknown:
         raise SystemExit(f"--only: unknown bench {sorted(unknown)}; choose from {list(BENCHES)}")
     summaries, walls = {}, {}
     for name in names:
-        summaries[name], walls[name] = bench(name, args.out)
+        summaries[name], walls[name] = bench(name, args.out, args.workers, args.quick)
     print(f"\nllm-grop {metadata.version('llm-grop')}; LLM: the embedded model's answers "
           f"(SmolLM2-135M-Instruct) replayed from {RECORDING.relative_to(HERE.parent)}; "
           f"ratings from the automatic rater")

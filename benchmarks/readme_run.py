@@ -6,12 +6,14 @@ answers the model gives live, without loading it), writes ``docs/run.png``, and 
 the README's blocks between the ``run example: console`` and ``run example: json``
 markers: the console as printed (100 columns), and an excerpt of the run JSON.
 ``tests/test_readme.py`` checks that the two blocks agree with each other and with a
-fresh run.
-Run: .venv/bin/python benchmarks/readme_run.py
+fresh run. ``--quick`` does all of it but writing: README.md and docs/run.png are left as
+they are.
+Run: .venv/bin/python benchmarks/readme_run.py [--quick]
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import re
@@ -21,7 +23,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from common import RECORDING
+from common import RECORDING, parse_args, scratch
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
@@ -87,20 +89,23 @@ def replace_block(text: str, name: str, body: str, fence: str) -> str:
 
 
 def main() -> None:
+    args = parse_args(argparse.ArgumentParser(description=__doc__.splitlines()[0]))
+    image = scratch("readme-run") / "run.png" if args.quick else ROOT / "docs" / "run.png"
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run.json"
         env = os.environ | {"COLUMNS": str(COLUMNS), "NO_COLOR": "1"}
         done = subprocess.run([sys.executable, "-m", "llm_grop", *COMMAND, "--json", str(out),
-                               "--image", str(ROOT / "docs" / "run.png")], cwd=tmp, env=env,
+                               "--image", str(image)], cwd=tmp, env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                               check=True)
         run = json.loads(out.read_text())
     console = done.stdout.replace(str(out), "run.json") \
-        .replace(str(ROOT / "docs" / "run.png"), "run.png").rstrip()
+        .replace(str(image), "run.png").rstrip()
     text = README.read_text()
     text = replace_block(text, "console", console, "")
     text = replace_block(text, "json", excerpt(run), "json")
-    README.write_text(text)
+    if not args.quick:
+        README.write_text(text)
     print(console)
 
 

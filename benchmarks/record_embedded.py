@@ -7,8 +7,10 @@ these answers exactly, without the model. Tasks and seeds already in the file ar
 skipped, so an interrupted recording can be resumed. With ``--fill``, every task and
 seed is run again, answering from the file where it can and asking the model only for
 calls the file lacks (a question added in a later version), which are appended.
+``--llm replay`` asks a recording (``--replay FILE``) instead of the model: ``--quick``
+records task 1, seed 0 that way into a scratch file, then fills it in.
 Run: .venv/bin/python benchmarks/record_embedded.py --tasks 1-8 --seeds 0-19 \
-        --out benchmarks/data/embedded_calls.jsonl [--fill]
+        --out benchmarks/data/embedded_calls.jsonl [--fill] [--quick]
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import argparse
 import json
 import time
 from pathlib import Path
+
+from common import RECORDING, parse_args, scratch
 
 from llm_grop import BackendOptions, arrange, make_llm
 from llm_grop.errors import LLMGropError, ReplayMissing
@@ -27,16 +31,17 @@ from llm_grop.llm.replay import ReplayLLM
 
 
 class FillIn(BaseLLM):
-    """Answers from a record file, and from the embedded model (appending its answer to
-    the file) for a call the file lacks."""
+    """Answers from a record file, and for a call the file lacks from the backend ``live``
+    (by default the embedded model), appending its answer to the file."""
 
     backend = "embedded"
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, live: str = "embedded",
+                 options: BackendOptions | None = None) -> None:
         self.path = path
         self.replay = ReplayLLM(BackendOptions(replay_path=str(path)))
         self.model = self.replay.model
-        self.live = create_llm("embedded", BackendOptions())
+        self.live = create_llm(live, options or BackendOptions())
         self.filled = 0
 
     def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
@@ -66,22 +71,41 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=Path("benchmarks/data/embedded_calls.jsonl"))
     ap.add_argument("--fill", action="store_true",
                     help="answer from the file, asking the model only for missing calls")
-    args = ap.parse_args()
+    ap.add_argument("--llm", default="embedded", choices=("embedded", "replay"),
+                    help="what answers: the model, or a recording (--replay)")
+    ap.add_argument("--replay", type=Path, default=RECORDING, help="the recording to replay")
+    args = parse_args(ap, {"tasks": "1", "seeds": "0", "llm": "replay",
+                           "out": lambda: scratch("record") / "calls.jsonl"})
+    live = BackendOptions(replay_path=args.replay)
     if args.fill:
-        filler = FillIn(args.out)
-        for task in _span(args.tasks):
-            for seed in _span(args.seeds):
-                try:
-                    arrange(task=task, llm=make_llm(filler), seed=seed)
-                except LLMGropError as exc:
-                    print(f"task {task} seed {seed}: {exc}")
-        print(json.dumps({"filled": filler.filled}))
+        fill(args.tasks, args.seeds, args.out, args.llm, live)
         return
-    done_file = args.out.with_suffix(".done")
+    record(args.tasks, args.seeds, args.out, args.llm, live)
+    if args.quick:
+        fill(args.tasks, args.seeds, args.out, args.llm, live)  # the other path too
+
+
+def fill(tasks: str, seeds: str, out: Path, backend: str, options: BackendOptions) -> None:
+    """Every task and seed again, answered from ``out`` and by ``backend`` for a call ``out``
+    lacks (appended to it)."""
+    filler = FillIn(out, backend, options)
+    for task in _span(tasks):
+        for seed in _span(seeds):
+            try:
+                arrange(task=task, llm=make_llm(filler), seed=seed)
+            except LLMGropError as exc:
+                print(f"task {task} seed {seed}: {exc}")
+    print(json.dumps({"filled": filler.filled}))
+
+
+def record(tasks: str, seeds: str, out: Path, backend: str, options: BackendOptions) -> None:
+    """Each task and seed not done yet (``out``'s ``.done`` file), recorded into ``out``
+    from ``backend``."""
+    done_file = out.with_suffix(".done")
     done = set(done_file.read_text().split()) if done_file.exists() else set()
-    llm = make_llm("embedded", record=args.out)
-    for task in _span(args.tasks):
-        for seed in _span(args.seeds):
+    llm = make_llm(backend, options, record=out)
+    for task in _span(tasks):
+        for seed in _span(seeds):
             key = f"{task}:{seed}"
             if key in done:
                 continue

@@ -9,7 +9,7 @@ first and not counted (GL warm-up).
 It uses only what the simulator offered before named cameras existed, so it also measures
 an older checkout: run it with ``PYTHONPATH=<old tree>/src`` and it times the two views
 that tree has, ``table`` (the top-down table render) and ``room`` (the video's overview).
-Run: MUJOCO_GL=osmesa .venv/bin/python benchmarks/render_3d.py [--frames N]
+Run: MUJOCO_GL=osmesa .venv/bin/python benchmarks/render_3d.py [--frames N] [--quick]
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from common import parse_args
 from PIL import Image
 
 from llm_grop.planning.navigation import Navigator
@@ -75,7 +76,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=30, help="frames timed per camera")
     parser.add_argument("--save", type=Path, help="also write each camera's frame here (PNG)")
-    args = parser.parse_args()
+    args = parse_args(parser, {"frames": 1})
     print(f"{SIZE[0]}x{SIZE[1]} pixels, mean (min) ms per frame over {args.frames} frames")
     for label, setting in SETTINGS.items():
         world = _world(setting)

@@ -2,7 +2,7 @@
 
 Two cases: the paper's Task 8 on a 0.9 x 0.6 m table (target: median <= 20 ms) and
 15 objects on a 1.2 x 0.8 m table. Relations are fixed here (no LLM); every gap is 3 cm.
-Run: .venv/bin/python benchmarks/sampler.py [--runs 20]
+Run: .venv/bin/python benchmarks/sampler.py [--runs 20] [--quick]
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import statistics
 import time
 
 import numpy as np
+from common import parse_args
 
 from llm_grop.arrangement.geometry import guided_layout
 from llm_grop.arrangement.sampling import sample_configurations, violations
@@ -76,7 +77,7 @@ def run(name: str, facts: list[tuple[str, str, str | None]], table: Table, runs:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=20)
-    args = ap.parse_args()
+    args = parse_args(ap, {"runs": 2})
     run("task 8", TASK8, Table(0.9, 0.6), args.runs)
     run("15 objects", FIFTEEN, Table(1.2, 0.8), args.runs)
 

@@ -6,12 +6,14 @@ Starts the server in its own process (2 workers by default) and measures:
 * ``POST /v1/arrangements`` and ``POST /v1/plans`` latency (p50, p95) and throughput at 1
   and at 20 concurrent clients (threads, each with its own HTTP client), requests drawn
   from the paper's tasks 1-8 with seeds 0-19;
-* 5x overload: 100 clients at once; every answer must be 200 or 429 (with Retry-After);
+* 5x overload: 100 clients at once (300 requests); every answer must be 200 or 429 (with
+  Retry-After);
 * the server's resident memory (the server and its workers);
 * kill and restart: a burst of runs, ``kill -9`` of the server while they run, a restart,
   and then every accepted job must end in a terminal state exactly once.
 
-    python benchmarks/serve_load.py [--workers 2] [--requests 60] [--burst 24]
+    python benchmarks/serve_load.py [--workers 2] [--requests 60] [--burst 40] [--clients 20]
+        [--overload 100] [--quick]
 """
 
 from __future__ import annotations
@@ -23,14 +25,13 @@ import socket
 import sqlite3
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from collections import Counter
 from pathlib import Path
 
 import httpx
-from common import RECORDING, median_p95
+from common import RECORDING, median_p95, parse_args, scratch
 
 from llm_grop.world.tasks import load_tasks
 
@@ -126,15 +127,19 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--requests", type=int, default=60)
     parser.add_argument("--burst", type=int, default=40)
-    args = parser.parse_args()
-    tmp = Path(tempfile.mkdtemp(prefix="serve-load-"))
+    parser.add_argument("--clients", type=int, default=20, help="clients at once, besides 1")
+    parser.add_argument("--overload", type=int, default=100,
+                        help="clients at once in the overload, 3 requests each")
+    args = parse_args(parser, {"workers": 1, "requests": 1, "burst": 2, "clients": 2,
+                               "overload": 2})
+    tmp = scratch("serve-load")
     proc, url = start(tmp / "jobs.sqlite", args.workers)
     print(f"llm-grop serve, {args.workers} workers, replayed SmolLM2-135M answers, loopback, "
           f"{os.cpu_count()} cores")
     try:
         for kind, path in (("arrange", "/v1/arrangements"), ("plan", "/v1/plans")):
-            load(url, path, bodies(kind, 8), 2)  # warm the workers up
-            for clients in (1, 20):
+            load(url, path, bodies(kind, min(8, args.requests)), 2)  # warm the workers up
+            for clients in (1, args.clients):
                 lat, codes, wall = load(url, path, bodies(kind, args.requests), clients)
                 p50, p95 = median_p95(lat)
                 print(f"{path:18s} {clients:2d} clients: p50 {p50 * 1000:6.0f} ms  p95 "
@@ -142,9 +147,11 @@ def main() -> None:
                       f"{dict(codes)}")
         print(f"resident memory after the load: {rss_mb(proc.pid):.0f} MB (server and "
               f"workers)")
-        lat, codes, wall = load(url, "/v1/arrangements", bodies("arrange", 300), 100)
+        lat, codes, wall = load(url, "/v1/arrangements", bodies("arrange", 3 * args.overload),
+                                args.overload)
         others = {k: v for k, v in codes.items() if k not in (200, 429)}
-        print(f"5x overload (100 clients, 300 requests): {codes[200]} answered, "
+        print(f"{args.overload / args.clients:g}x overload ({args.overload} clients, "
+              f"{3 * args.overload} requests): {codes[200]} answered, "
               f"{codes[429]} refused with 429 + Retry-After, {sum(others.values())} other "
               f"statuses {others or ''}")
         print(f"resident memory after the overload: {rss_mb(proc.pid):.0f} MB")

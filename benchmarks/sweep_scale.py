@@ -8,8 +8,10 @@ trial against the local run, the LLM cache's hit rate, and whether the two runs'
 the same. Then projects, from the measured per-trial costs, the workers and wall time a
 million episodes take with a live LLM of a stated latency.
 
+``--quick``: Task 8 in 1 cell (1 chair, weight 40 s), one trial, the local executor, 1
+worker, in a scratch directory.
 Run: .venv/bin/python benchmarks/sweep_scale.py [--out DIR] [--trials 20] [--workers 2]
-     [--executors local,ray] [--images] [--latency-s 2.0] [--target-hours 24]
+     [--executors local,ray] [--images] [--latency-s 2.0] [--target-hours 24] [--quick]
 """
 
 from __future__ import annotations
@@ -23,20 +25,23 @@ import sys
 import time
 from pathlib import Path
 
-from common import RECORDING
+from common import RECORDING, parse_args, scratch
 
 from llm_grop.experiment.trial import RUN_DEPENDENT_FIELDS as RUN_DEPENDENT
 
 CHAIRS = (0, 1, 2, 4)
 WEIGHTS = (20, 40, 80, 160)
+#: ``--quick``'s tasks and grid.
+QUICK_TASKS, QUICK_CHAIRS, QUICK_WEIGHTS = "8", (1,), (40,)
 
 
-def sweep_file(path: Path, trials: int, images: bool) -> None:
+def sweep_file(path: Path, trials: int, images: bool, tasks: str = "paper",
+               chairs: tuple[int, ...] = CHAIRS, weights: tuple[int, ...] = WEIGHTS) -> None:
     path.write_text(
-        "tasks: paper\nmethods: tpra,latp,grop,llm-grop\n"
+        f"tasks: {tasks}\nmethods: tpra,latp,grop,llm-grop\n"
         f"trials: {trials}\nimages: {'true' if images else 'false'}\n"
         f"llm: {{backend: replay, replay: {RECORDING.resolve()}}}\n"
-        f"grid:\n  chairs: {list(CHAIRS)}\n  weight: {list(WEIGHTS)}\n", encoding="utf-8")
+        f"grid:\n  chairs: {list(chairs)}\n  weight: {list(weights)}\n", encoding="utf-8")
 
 
 def rows(out: Path) -> dict[tuple[str, int, int, str], dict]:
@@ -78,10 +83,13 @@ def main() -> None:
     ap.add_argument("--target-hours", type=float, default=24.0)
     ap.add_argument("--reuse", action="store_true",
                     help="report on the runs already in --out instead of running them again")
-    args = ap.parse_args()
+    args = parse_args(ap, {"out": lambda: scratch("sweep-scale"), "trials": 1, "workers": 1,
+                           "executors": "local"})
     args.out.mkdir(parents=True, exist_ok=True)
     spec = args.out / "sweep.yaml"
-    sweep_file(spec, args.trials, args.images)
+    chairs, weights = (QUICK_CHAIRS, QUICK_WEIGHTS) if args.quick else (CHAIRS, WEIGHTS)
+    sweep_file(spec, args.trials, args.images, QUICK_TASKS if args.quick else "paper", chairs,
+               weights)
     walls, found = {}, {}
     for executor in args.executors.split(","):
         walls[executor] = run(executor, spec, args.out / executor, args.workers, args.reuse)
@@ -91,7 +99,7 @@ def main() -> None:
     first = next(iter(found))
     n = len(found[first])
     calls = sum(r["llm_calls"] for r in found[first].values())
-    print(f"\nsweep: {n} episodes ({len(CHAIRS) * len(WEIGHTS)} cells), "
+    print(f"\nsweep: {n} episodes ({len(chairs) * len(weights)} cells), "
           f"{args.workers} workers, pictures {'on' if args.images else 'off'}")
     print("| executor | wall (s) | per episode (ms) | against local | overhead per episode "
           "(ms) | LLM calls | cache hits | hit rate | rows as local |")

@@ -10,12 +10,26 @@ is around the table's centre, where the authors root both the baselines and LLM-
 draw is redrawn while the object is not wholly on the table (a round one's too) or
 overlaps one already placed (the sampler's footprint test, sizes inflated 5%). Nothing is
 stacked: without relations nothing says what rests on what.
+
+**When the authors' box cannot hold the objects.** The authors' box (centres within
+±0.225 m) holds the paper's settings but not, say, 20 objects. The rule: a configuration
+is drawn in the authors' box; when :data:`MAX_TRIES` tries find none there, that
+configuration and every later one of the call are drawn in the **grown box** instead:
+each diner's box grows, along each of its place's axes, to the place's own half-extent
+(the diner's share of the table; the whole top for one diner) where that is larger than
+0.225 m, and its Gaussian grows with it (std dev still :data:`SIGMA_M` /
+:data:`TRUNCATION_M` of the half-extent), the authors' shape stretched. Only a call the
+authors' box could not serve changes, so every arrangement the authors' box holds is drawn
+exactly as before (the same numbers from the same seed); the grown draws come from the
+same random stream, so they too are the same for the same seed. When the grown box holds
+no configuration either in :data:`MAX_TRIES` tries, the call raises :class:`Infeasible`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -40,17 +54,38 @@ TRUNCATION_M = 0.225
 #: Candidates drawn per object per try, all tested at once.
 BATCH = 64
 
-#: Tries per configuration before giving up.
+#: Tries per configuration before giving up (in the authors' box, then in the grown one).
 MAX_TRIES = 50
+
+
+@dataclass(frozen=True)
+class DrawBox:
+    """Where an object's centre is drawn, in its diner's place frame: a Gaussian of std dev
+    ``sigma_m`` along each axis ``(u, v)``, truncated to ``half_m`` either side; metres."""
+
+    sigma_m: tuple[float, float]
+    half_m: tuple[float, float]
+
+
+#: The authors' box: ``N(0, 0.03 I)`` truncated to ±0.225 m along both axes.
+AUTHORS_BOX = DrawBox((SIGMA_M, SIGMA_M), (TRUNCATION_M, TRUNCATION_M))
+
+
+def grown_box(place: Place) -> DrawBox:
+    """The box a diner's draws grow to when the authors' box cannot hold the objects: along
+    each axis, ``place``'s half-extent where that is larger than :data:`TRUNCATION_M`, with
+    the Gaussian's std dev scaled by the same factor (see the module doc)."""
+    half = (max(TRUNCATION_M, place.box.width / 2), max(TRUNCATION_M, place.box.depth / 2))
+    return DrawBox((SIGMA_M * half[0] / TRUNCATION_M, SIGMA_M * half[1] / TRUNCATION_M), half)
 
 
 def random_configurations(items: Sequence[Item], table: Table, rng: np.random.Generator,
                           m: int = DEFAULTS.m) -> tuple[Configuration, ...]:
     """``m`` configurations with every item drawn at random around its diner's place
-    centre, on the table and without overlaps (see the module doc). An item's ``diner``
-    is its seat's index in ``table.seats`` (``None``: the first). Raises
-    :class:`Infeasible` when an item cannot lie on the table or a configuration is not
-    found in :data:`MAX_TRIES` tries."""
+    centre, on the table and without overlaps, in the authors' box or, when that cannot
+    hold the items, in the grown box (see the module doc). An item's ``diner`` is its
+    seat's index in ``table.seats`` (``None``: the first). Raises :class:`Infeasible` when
+    an item cannot lie on the table or a configuration is not found in either box."""
     order = sorted(range(len(items)), key=lambda i: -Footprint.of_spec(items[i].spec).area)
     feet = [Footprint.of_spec(it.spec) for it in items]
     for i in order:
@@ -63,19 +98,36 @@ def random_configurations(items: Sequence[Item], table: Table, rng: np.random.Ge
             raise BadInput(f"{it.name!r} belongs to diner {it.diner}, but the {table.label} "
                            f"seats {len(seated)}")
     place = [seated[it.diner or 0] for it in items]
-    return tuple(_one(items, feet, place, order, table, rng) for _ in range(m))
+    authors = [AUTHORS_BOX] * len(items)
+    grown = [grown_box(p) for p in place]
+    boxes = authors
+    out = []
+    for _ in range(m):
+        found = _one(items, feet, place, boxes, order, table, rng)
+        if found is None and boxes is authors and grown != authors:
+            boxes = grown  # this configuration and every later one of the call
+            found = _one(items, feet, place, boxes, order, table, rng)
+        if found is None:
+            also = ", nor in each diner's whole place" if boxes is grown else ""
+            raise Infeasible(f"could not place {len(items)} objects at random without "
+                             f"overlaps on the {table.label} in {MAX_TRIES} tries{also}")
+        out.append(found)
+    return tuple(out)
 
 
 def _one(items: Sequence[Item], feet: Sequence[Footprint], place: Sequence[Place],
-         order: Sequence[int], table: Table, rng: np.random.Generator) -> Configuration:
+         boxes: Sequence[DrawBox], order: Sequence[int], table: Table,
+         rng: np.random.Generator) -> Configuration | None:
+    """One configuration drawn in ``boxes`` (one per item), or ``None`` after
+    :data:`MAX_TRIES` tries."""
     for _ in range(MAX_TRIES):
         xy: dict[int, tuple[float, float]] = {}
         for i in order:
-            f = feet[i]
-            u = rng.normal(0.0, SIGMA_M, BATCH)
-            v = rng.normal(0.0, SIGMA_M, BATCH)
+            f, box = feet[i], boxes[i]
+            u = rng.normal(0.0, box.sigma_m[0], BATCH)
+            v = rng.normal(0.0, box.sigma_m[1], BATCH)
             # Rejecting the draws beyond the truncation leaves the truncated Gaussian.
-            ok = (np.abs(u) <= TRUNCATION_M) & (np.abs(v) <= TRUNCATION_M)
+            ok = (np.abs(u) <= box.half_m[0]) & (np.abs(v) <= box.half_m[1])
             cx, cy = place[i].to_table(u, v)
             ok &= inside_table(cx, cy, f, table)
             for j, (x, y) in xy.items():
@@ -88,5 +140,4 @@ def _one(items: Sequence[Item], feet: Sequence[Footprint], place: Sequence[Place
             return Configuration(tuple(
                 Placement(it.name, xy[i][0], xy[i][1], 0.0, it.spec.shape, it.spec.size, None,
                           it.kind, it.spec.height, it.diner) for i, it in enumerate(items)))
-    raise Infeasible(f"could not place {len(items)} objects at random without overlaps on the "
-                     f"{table.label} in {MAX_TRIES} tries")
+    return None
