@@ -13,7 +13,7 @@ import click
 from annotated_types import Ge, Gt, Le, Lt
 
 from llm_grop.cli.options import F
-from llm_grop.settings import RunSettings, door, flag, help_text
+from llm_grop.settings import RunSettings, door, fields, flag, help_text
 
 
 def _parse_table(ctx: click.Context, param: click.Parameter, text: str | None) -> str | None:
@@ -113,15 +113,13 @@ def checked_settings(params: Mapping[str, Any], **fixed: Any) -> RunSettings:
     return settings
 
 
+# Each command takes groups of the record's fields (its metadata's ``group``), so a field
+# added to a group appears on every command that takes it.
 #: The fields every command that calls an LLM takes, in ``--help``'s order.
-LLM_FIELDS = ("llm", "model", "base_url", "replay", "timeout_s", "max_answer_bytes",
-              "retries")
+LLM_FIELDS = ("llm", *fields("backend"))
 #: The arrangement's fields, after the LLM's.
-ARRANGE_FIELDS = ("catalog_files", "m", "attempts", "zero_shot", "notes", "preferences",
-                  "preferences_file", "temperature", "top_p", "max_tokens",
-                  "frequency_penalty", "presence_penalty")
+ARRANGE_FIELDS = tuple(f for f in fields("llm") if f != "llm")
 #: Where the run happens and how it is planned and executed.
-ROOM_FIELDS = ("table", "simulator", "sim_options", "grasp", "truth", "feasibility",
-               "weight", "fidelity_weight")
+ROOM_FIELDS = ("table", *fields("sim"), *fields("plan"))
 #: The executive's attempt counts.
-ATTEMPT_FIELDS = ("manip_attempts", "nav_attempts")
+ATTEMPT_FIELDS = fields("execution")

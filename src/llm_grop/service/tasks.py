@@ -17,7 +17,7 @@ from llm_grop.llm.base import LLM, CallLog
 from llm_grop.llm.registry import create_llm
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.models import ArrangeBody, PlanBody, RunBody
-from llm_grop.settings import DEFAULTS, RunSettings
+from llm_grop.settings import RunSettings
 from llm_grop.world.table import Table
 
 Files = dict[str, tuple[str, bytes]]
@@ -62,10 +62,17 @@ def perform(kind: str, body: dict[str, Any], config: ServiceConfig, llms: Backen
     return _run(RunBody.model_validate(body), config, llms, on_event)
 
 
-def _settings(body: ArrangeBody | PlanBody, **more: Any) -> RunSettings:
-    """The settings record of a body's fields (the LLM is the server's, chosen apart)."""
-    return RunSettings.make(seed=body.seed, m=body.m, guess=body.guess,
-                            preferences=tuple(body.preferences), **more)
+#: Body fields named as a setting that are no value of it: the server's backend by its
+#: name, the table as an object, the scene as a document and the sensed chairs (the
+#: record's ``scene`` is a file and its ``chairs`` a number to sample).
+_APART = ("llm", "table", "scene", "chairs")
+
+
+def _settings(body: ArrangeBody | PlanBody) -> RunSettings:
+    """The settings record of a body's fields that the record holds (a JSON body names
+    them as the record does; the LLM is the server's, chosen apart)."""
+    return RunSettings.make({name: getattr(body, name) for name in type(body).model_fields
+                             if name in RunSettings.model_fields and name not in _APART})
 
 
 def _table(body: ArrangeBody) -> Table:
@@ -132,8 +139,8 @@ def _scene(body: PlanBody) -> Any:
 
 
 def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
-             on_event: Callable[[str], None], check: Callable[..., None] | None = None,
-             simulator: str = DEFAULTS.simulator) -> Any:
+             on_event: Callable[[str], None], check: Callable[..., None] | None = None
+             ) -> Any:
     from llm_grop.api import plan
     from llm_grop.world.serialize import arrangement_from_dict
 
@@ -143,9 +150,7 @@ def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
         if body.arrangement is not None else None
     if arrangement is not None:
         _check_size(len(arrangement.placements), config)
-    settings = _settings(body, task=body.task, method=body.method,
-                         feasibility=body.feasibility,
-                         simulator=simulator)
+    settings = _settings(body)
     planned = plan(body.request, settings, arrangement=arrangement, scene=_scene(body),
                    table=body.table.table() if body.table is not None else None,
                    llm=llms.log(body.llm), on_event=on_event, check=check)
@@ -181,8 +186,7 @@ def _run(body: RunBody, config: ServiceConfig, llms: Backends,
         sim = create_simulator(body.simulator, {"video_path": str(video)} if films else None)
         if renders:
             sim.check_rendering()
-        planned = _planned(body, config, llms, on_event, check=sim.check,
-                           simulator=body.simulator)
+        planned = _planned(body, config, llms, on_event, check=sim.check)
         result = execute(planned, simulator=sim)
         files: Files = _table_pictures(result.final, config.scratch) | {
             "room.png": (PNG, _png(lambda f: draw_run(result, f), config.scratch))}

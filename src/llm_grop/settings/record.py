@@ -188,14 +188,14 @@ class RunSettings(BaseModel):
               "profile (mujoco: what the 3D world was measured to do) [default: the 2D "
               "simulator's own, the default profile's curves].", group="sim",
         door=Door(metavar="PROFILE"))
-    nav_attempts: int = setting(
-        3, "Attempts per navigation goal before the next fallback standing position.",
-        group="sim", ge=1)
     manip_attempts: int | None = setting(
         None, "Attempts per pick and per place of each object, re-grasps included "
               "[default: the method's: 20 for llm-grop, 10 for the others, as the authors "
-              "ran them].", group="sim", ge=1)
+              "ran them].", group="execution", ge=1)
 
+    nav_attempts: int = setting(
+        3, "Attempts per navigation goal before the next fallback standing position.",
+        group="execution", ge=1)
     # The LLM
     llm: str = setting(
         "embedded", "LLM backend: embedded, openai, replay, or a plugin's (see `llm-grop "
