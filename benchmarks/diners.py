@@ -22,9 +22,9 @@ from common import parse_args
 from llm_grop import BackendOptions, run
 from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.arrangement.preferences import load_preference_file
+from llm_grop.contract.serialize import arrangement_to_dict
 from llm_grop.errors import LLMGropError
 from llm_grop.evaluation import rate
-from llm_grop.world.serialize import arrangement_to_dict
 from llm_grop.world.table import Table
 
 DATA = Path(__file__).parent / "data"

@@ -15,6 +15,7 @@ from common import parse_args
 
 from llm_grop import seeds
 from llm_grop.execution import execute
+from llm_grop.files.scene_file import load_scene
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import PlanningContext
@@ -23,7 +24,6 @@ from llm_grop.simulation.scenario import prepare_episode
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import items_from_names
-from llm_grop.world.scene_file import load_scene
 
 PAIRS = (("mug lid", "mug"), ("mug", "mug mat"), ("bread", "bread plate"))
 

@@ -16,7 +16,7 @@ from dataclasses import replace
 from common import median_p95, parse_args, replay_llm
 
 from llm_grop.api import run
-from llm_grop.world.scene_file import load_scene
+from llm_grop.files.scene_file import load_scene
 
 TEN = ("set the table with a dinner plate, a bread plate, a dinner fork, a salad fork, "
        "a dinner knife, a soup spoon, a water cup, a mug, a mug mat and a napkin")

@@ -24,13 +24,13 @@ import numpy as np
 from common import parse_args
 from PIL import Image
 
+from llm_grop.files.scene_file import load_scene
 from llm_grop.planning.navigation import Navigator
 from llm_grop.simulation.mujoco import options, render
 from llm_grop.simulation.mujoco.simulator import MujocoOptions, MujocoSimulator
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import items_from_names
 from llm_grop.world.scene import ObjectSource
-from llm_grop.world.scene_file import load_scene
 
 #: Place settings, table frame (metres; +y away from the diner).
 SETTINGS = {

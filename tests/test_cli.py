@@ -141,7 +141,7 @@ def test_embedded_model_end_to_end(tmp_path: Path) -> None:
     assert {o["name"] for o in data["objects"]} == {"dinner plate", "dinner fork", "dinner knife"}
     assert data["relations"], "the model's consistent relations are kept"
     from llm_grop.arrangement.sampling import violations
-    from llm_grop.world.serialize import arrangement_from_dict
+    from llm_grop.contract.serialize import arrangement_from_dict
 
     arr = arrangement_from_dict(data)
     from llm_grop.world.arrangement import Configuration
@@ -241,7 +241,7 @@ def test_outputs_with_long_names_are_written(tmp_path: Path) -> None:
 def test_staged_outputs_are_written_all_or_none(tmp_path: Path) -> None:
     from llm_grop.cli.options import StagedOutputs
     from llm_grop.errors import BadInput
-    from llm_grop.world.jsonio import write_json
+    from llm_grop.files.jsonio import write_json
 
     first, second = tmp_path / "a.json", tmp_path / "b.json"
     first.write_text("old\n")
@@ -265,7 +265,7 @@ def test_staged_outputs_are_written_all_or_none(tmp_path: Path) -> None:
 
 def test_write_json_is_atomic_and_keeps_the_files_mode(tmp_path: Path) -> None:
     from llm_grop.errors import BadInput
-    from llm_grop.world.jsonio import write_json
+    from llm_grop.files.jsonio import write_json
 
     path = tmp_path / "t.json"
     path.write_text("old\n")

@@ -14,7 +14,7 @@ import llm_grop
 from cli_support import REQUEST
 from cli_support import one_line_error as _one_line_error
 from llm_grop.cli import main
-from llm_grop.world.schemas import json_schema
+from llm_grop.contract.schemas import json_schema
 
 
 def test_python_dash_m_runs_the_command() -> None:

@@ -28,10 +28,10 @@ from pathlib import Path
 import pytest
 
 from llm_grop import plugins
+from llm_grop.contract.models import TrialRow
 from llm_grop.errors import BadInput
 from llm_grop.methods.base import ComposedMethod, Method
 from llm_grop.methods.registry import METHODS, register_method
-from llm_grop.world.contract import TrialRow
 
 #: Seconds any one subprocess may take (a small bench takes a few).
 TIMEOUT_S = 300

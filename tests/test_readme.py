@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from llm_grop.world.scene_file import parse_scene
+from llm_grop.files.scene_file import parse_scene
 from scripted import scripted
 
 README = Path(__file__).resolve().parents[1] / "README.md"

@@ -155,7 +155,7 @@ def test_component_records_given_whole_are_lifted_into_the_record() -> None:
 
 def test_a_record_and_keywords_give_the_same_run() -> None:
     import llm_grop
-    from llm_grop.world.run_json import run_to_dict
+    from llm_grop.contract.run_json import run_to_dict
 
     def doc(result) -> dict:
         out = run_to_dict(result)

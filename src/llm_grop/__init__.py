@@ -19,6 +19,11 @@ import importlib
 from importlib import metadata
 from typing import TYPE_CHECKING, Any
 
+from llm_grop import moved
+
+# Old import paths of modules that moved (llm_grop.world.contract, ...) keep working.
+moved.install()
+
 if TYPE_CHECKING:
     from llm_grop.api import (
         PlanResult,
@@ -34,8 +39,12 @@ if TYPE_CHECKING:
         understand,
     )
     from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions
+    from llm_grop.contract.run_json import run_to_dict
+    from llm_grop.contract.serialize import arrangement_from_dict, arrangement_to_dict
     from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError, LLMTransient
     from llm_grop.evaluation.rater import Rating, rate
+    from llm_grop.files.jsonio import write_json
+    from llm_grop.files.scene_file import load_scene
     from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
     from llm_grop.llm.registry import register_backend
     from llm_grop.methods.registry import register_method
@@ -46,14 +55,10 @@ if TYPE_CHECKING:
     from llm_grop.simulation.registry import register_simulator
     from llm_grop.world.arrangement import Arrangement, Configuration, Item, Placement
     from llm_grop.world.catalog import Catalog, ObjectSpec
-    from llm_grop.world.jsonio import write_json
     from llm_grop.world.plan import RunResult
     from llm_grop.world.relation import Relation
     from llm_grop.world.request import Request
-    from llm_grop.world.run_json import run_to_dict
     from llm_grop.world.scene import Scene
-    from llm_grop.world.scene_file import load_scene
-    from llm_grop.world.serialize import arrangement_from_dict, arrangement_to_dict
     from llm_grop.world.table import Table
 
 #: Public name -> the module that defines it.
@@ -99,12 +104,12 @@ _EXPORTS: dict[str, str] = {
     "ObjectSpec": "llm_grop.world.catalog",
     "RunResult": "llm_grop.world.plan",
     "Relation": "llm_grop.world.relation",
-    "run_to_dict": "llm_grop.world.run_json",
+    "run_to_dict": "llm_grop.contract.run_json",
     "Scene": "llm_grop.world.scene",
-    "load_scene": "llm_grop.world.scene_file",
-    "arrangement_from_dict": "llm_grop.world.serialize",
-    "arrangement_to_dict": "llm_grop.world.serialize",
-    "write_json": "llm_grop.world.jsonio",
+    "load_scene": "llm_grop.files.scene_file",
+    "arrangement_from_dict": "llm_grop.contract.serialize",
+    "arrangement_to_dict": "llm_grop.contract.serialize",
+    "write_json": "llm_grop.files.jsonio",
     "Table": "llm_grop.world.table",
 }
 

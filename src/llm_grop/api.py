@@ -216,7 +216,7 @@ def plan(request: str | None = None, settings: RunSettings | None = None, *,
     appends each LLM call to a JSONL file.
 
     With ``arrangement`` (an :class:`Arrangement`, e.g. read with
-    :func:`~llm_grop.world.serialize.arrangement_from_dict`) instead of a request, its
+    :func:`~llm_grop.contract.serialize.arrangement_from_dict`) instead of a request, its
     placements are planned for as they are, on its table, and no LLM is asked; ``method``
     then only chooses how standing positions are picked. ``check(scene, items)`` may refuse
     the episode before any work (a simulator's own check). :func:`execute` runs the plan.
@@ -231,11 +231,11 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
           check: Callable[[Scene, Sequence[Item]], None] | None,
           arrangement: Arrangement | None = None) -> PlanResult:
     """:func:`plan` of ``job``."""
+    from llm_grop.files.scene_file import load_scene, set_target_top
     from llm_grop.methods.base import EpisodeInput, GivenArrangement
     from llm_grop.methods.episode import plan_episode
     from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.scenario import prepare_episode
-    from llm_grop.world.scene_file import load_scene, set_target_top
 
     s = job.settings
     catalog = catalog or Catalog.load(s.catalog_files)
@@ -327,9 +327,9 @@ def _given_items(arrangement: Arrangement, catalog: Catalog) -> tuple[Item, ...]
 
 
 def plan_to_dict(planned: PlanResult) -> dict[str, Any]:
-    """The plan JSON of ``planned`` (:mod:`llm_grop.world.plan_doc`): the steps a robot stack
+    """The plan JSON of ``planned`` (:mod:`llm_grop.contract.plan_doc`): the steps a robot stack
     executes, in the contract's frames, at full precision."""
-    from llm_grop.world.plan_doc import plan_json
+    from llm_grop.contract.plan_doc import plan_json
 
     p = planned.planned
     return plan_json(method=planned.method, task=planned.task, seed=planned.input.seed,
@@ -343,9 +343,9 @@ def plan_from_dict(data: Mapping[str, Any], *, catalog: Catalog | None = None,
                    where: str = "plan") -> PlanResult:
     """A plan JSON read back (as :func:`plan_to_dict` wrote it), ready for :func:`execute`:
     executing it gives the same run as executing the plan it was written from."""
+    from llm_grop.contract.plan_doc import read_plan_json
     from llm_grop.methods.base import EpisodeInput
     from llm_grop.methods.episode import PlannedEpisode
-    from llm_grop.world.plan_doc import read_plan_json
 
     catalog = catalog or Catalog.load()
     doc, the_plan, arrangement, scene = read_plan_json(data, where)

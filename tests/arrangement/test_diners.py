@@ -13,13 +13,13 @@ from llm_grop import BackendOptions, arrange
 from llm_grop.arrangement.diners import seat_table
 from llm_grop.arrangement.fidelity import GAP_TOLERANCE_M
 from llm_grop.arrangement.pipeline import ArrangeOptions
+from llm_grop.contract.serialize import arrangement_to_dict
 from llm_grop.errors import BadInput
 from llm_grop.evaluation import rate
 from llm_grop.geometry.places import default_seats, places
 from llm_grop.language.request import parse_request
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.seat import Seat
-from llm_grop.world.serialize import arrangement_to_dict
 from llm_grop.world.table import Table
 
 CATALOG = Catalog.load(use_env=False)
@@ -166,7 +166,7 @@ def _room_with(extra: str) -> str:
 
 def test_a_scene_seats_its_diners_and_a_plain_request_serves_each() -> None:
     from llm_grop import run
-    from llm_grop.world.scene_file import parse_scene, scene_to_dict
+    from llm_grop.files.scene_file import parse_scene, scene_to_dict
     scene = parse_scene(_room_with("diners: [[0.0, -0.3, 1.5708], [0.0, 0.3, -1.5708]]\n"),
                         "room.yaml")
     assert len(scene.target_top.diners) == 2
@@ -183,7 +183,7 @@ def test_a_scene_seats_its_diners_and_a_plain_request_serves_each() -> None:
 
 
 def test_a_scene_seat_inside_the_table_names_the_field() -> None:
-    from llm_grop.world.scene_file import parse_scene
+    from llm_grop.files.scene_file import parse_scene
     with pytest.raises(BadInput, match=r"room\.yaml: diners: diner 0's seat .* lies inside"):
         parse_scene(_room_with("diners: [[0.0, 0.0, 1.5708]]\n"), "room.yaml")
 
@@ -220,7 +220,7 @@ def test_bench_in_a_scene_that_seats_two_rates_each_setting(tmp_path: Path) -> N
 
 def test_one_seat_across_the_table_is_that_diner_s_setting() -> None:
     from llm_grop import run
-    from llm_grop.world.scene_file import parse_scene
+    from llm_grop.files.scene_file import parse_scene
     scene = parse_scene(_room_with("diners: [[0.0, 0.3, -1.5708]]\n"), "room.yaml")
     result = run(f"set the table with {SETTING}", scene=scene, seed=0, llm="replay",
                  llm_options=BackendOptions(replay_path=str(NO_CALLS)), catalog=CATALOG,

@@ -6,9 +6,9 @@ import pytest
 
 from llm_grop import BackendOptions, Table, arrange
 from llm_grop.arrangement.sampling import violations
+from llm_grop.contract.serialize import arrangement_to_dict
 from llm_grop.errors import Infeasible, LLMError
-from llm_grop.world.jsonio import dumps
-from llm_grop.world.serialize import arrangement_to_dict
+from llm_grop.files.jsonio import dumps
 from scripted import PAPER_CONFLICT, PAPER_CONSISTENT, TASK1_GOOD, scripted
 
 PAPER_REQUEST = "a fruit bowl, a butter knife, a dinner fork, a dinner knife and a water cup"

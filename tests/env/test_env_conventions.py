@@ -17,7 +17,7 @@ from gymnasium.wrappers import TimeLimit
 from llm_grop.env import ENV_ID, MAX_EPISODE_STEPS
 from llm_grop.env.dining import NAVIGATE, PICK, PLACE, DiningRoomEnv
 from llm_grop.errors import BadInput
-from llm_grop.world.scene_file import load_scene, set_target_top
+from llm_grop.files.scene_file import load_scene, set_target_top
 from llm_grop.world.table import Table
 
 SIMULATORS = ["kinematic2d", "mujoco"]

@@ -10,8 +10,8 @@ import jsonschema
 import pytest
 
 from llm_grop.cli import main
+from llm_grop.contract.schemas import json_schema
 from llm_grop.experiment.trial import RUN_DEPENDENT_FIELDS
-from llm_grop.world.schemas import json_schema
 
 RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"
 BASE = ["bench", "--tasks", "1", "--trials", "2", "--llm", "replay", "--replay", str(RECORDING),

@@ -12,9 +12,9 @@ import pytest
 from scipy import stats
 
 from llm_grop import seeds
+from llm_grop.contract.models import TrialRow
 from llm_grop.experiment.paired import RESAMPLES, compare, paired_by_trial
 from llm_grop.experiment.runner import write_reports
-from llm_grop.world.contract import TrialRow
 from rows import trial_row
 
 # Seven trials of task 1 (and trial 6 of A has no plan, so no execution time).

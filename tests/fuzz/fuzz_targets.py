@@ -26,6 +26,7 @@ from llm_grop.arrangement.preferences import (
     stated_gaps,
 )
 from llm_grop.errors import LLMGropError
+from llm_grop.files.scene_file import load_scene, parse_scene
 from llm_grop.language.answer_reader import parse_relations
 from llm_grop.language.llm_reading import read_reading_answer
 from llm_grop.language.reading import item_names
@@ -33,7 +34,6 @@ from llm_grop.language.request import parse_request, read_request
 from llm_grop.llm.record import LLMCallRecord, append_record, load_records
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import MAX_COUNT
-from llm_grop.world.scene_file import load_scene, parse_scene
 from llm_grop.world.table import Table
 
 TABLE = Table()

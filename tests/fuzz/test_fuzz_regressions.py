@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from llm_grop.errors import BadInput
+from llm_grop.files.scene_file import parse_scene
 from llm_grop.llm.record import LLMCallRecord, append_record, load_records
-from llm_grop.world.scene_file import parse_scene
 
 _ROOM = "room: {width: 8, depth: 6}\n"
 _TABLE = "{name: dining table, center: [4, 3], size: [0.9, 0.6]}"

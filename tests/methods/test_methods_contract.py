@@ -8,12 +8,12 @@ import jsonschema
 import pytest
 
 from llm_grop.api import make_llm, run
+from llm_grop.contract.run_json import run_to_dict
+from llm_grop.contract.schemas import json_schema
 from llm_grop.errors import BadInput
+from llm_grop.files.jsonio import dumps
 from llm_grop.llm.base import BackendOptions
 from llm_grop.methods.registry import available_methods, get_method
-from llm_grop.world.jsonio import dumps
-from llm_grop.world.run_json import run_to_dict
-from llm_grop.world.schemas import json_schema
 from scripted import TASK1_GOOD, scripted
 
 REQUEST = "set the table with a dinner plate, a dinner fork and a dinner knife"

@@ -171,7 +171,7 @@ def test_pickup_stances_the_robot_cannot_reach_are_not_used() -> None:
     from dataclasses import replace
 
     from llm_grop.api import run
-    from llm_grop.world.scene_file import load_scene
+    from llm_grop.files.scene_file import load_scene
 
     # Turned this way, the side table leaves a pocket between it and the corner walls
     # where the arm would reach best but the base cannot drive.

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from llm_grop.files.profiles import load_profile
 from llm_grop.planning.feasibility import ParametricFeasibility, feasibility_profile
 from llm_grop.planning.grop import build_plan, choose, expected_duration_s
 from llm_grop.planning.navigation import Navigator
@@ -15,7 +16,6 @@ from llm_grop.simulation.kinematic2d import Kinematic2D, Kinematic2DOptions
 from llm_grop.simulation.outcomes import ParametricOutcomes
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Pose2D
-from llm_grop.world.profiles import load_profile
 from llm_grop.world.request import items_from_names
 from scenes import config, placement, two_table_room
 

@@ -15,6 +15,7 @@ from PIL import Image
 from llm_grop.arrangement.predicates import CENTER_FRACTION, Footprint, in_center, inside_table
 from llm_grop.arrangement.random_placement import random_configurations
 from llm_grop.cli import main
+from llm_grop.files.scene_file import load_scene, set_target_top
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.planning.occupancy import build_grid
 from llm_grop.planning.standing import candidate_standing_poses
@@ -26,7 +27,6 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box, Pose2D
 from llm_grop.world.request import items_from_names
 from llm_grop.world.scene import Scene, SceneTable
-from llm_grop.world.scene_file import load_scene, set_target_top
 from llm_grop.world.table import Table
 
 RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"

@@ -10,7 +10,7 @@ import pytest
 
 from llm_grop import execute, plan_from_dict
 from llm_grop.cli import main
-from llm_grop.world.run_json import run_to_dict
+from llm_grop.contract.run_json import run_to_dict
 from service_support import RECORDING, Server
 
 

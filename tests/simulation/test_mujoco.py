@@ -16,6 +16,7 @@ from cli_support import one_line_error
 from llm_grop import seeds
 from llm_grop.api import run
 from llm_grop.cli import main
+from llm_grop.contract.run_json import run_to_dict
 from llm_grop.errors import BadInput
 from llm_grop.execution import execute
 from llm_grop.planning.grop import build_plan, choose
@@ -29,7 +30,6 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box
 from llm_grop.world.plan import Execution, Plan
 from llm_grop.world.request import items_from_names
-from llm_grop.world.run_json import run_to_dict
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
 from scenes import config, two_table_room
 

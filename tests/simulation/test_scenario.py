@@ -12,12 +12,12 @@ from shapely.geometry import Point, Polygon
 from shapely.geometry import box as rect
 
 from llm_grop.errors import BadInput, Infeasible
+from llm_grop.files.scene_file import load_scene, parse_scene, scene_to_dict
 from llm_grop.simulation.scenario import prepare_episode
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
-from llm_grop.world.scene_file import load_scene, parse_scene, scene_to_dict
 from scenes import two_table_room
 
 

@@ -10,6 +10,8 @@ import pytest
 
 from llm_grop import seeds
 from llm_grop.api import run
+from llm_grop.contract.run_json import run_to_dict
+from llm_grop.contract.schemas import json_schema
 from llm_grop.execution import ExecutionPolicy, execute
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
@@ -18,9 +20,7 @@ from llm_grop.simulation.registry import available_simulators, create_simulator
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.plan import REASONS, Execution, Plan
 from llm_grop.world.request import items_from_names
-from llm_grop.world.run_json import run_to_dict
 from llm_grop.world.scene import Scene
-from llm_grop.world.schemas import json_schema
 from scenes import config, placement, two_table_room
 
 NAMES = ["dinner plate", "bread", "dinner fork"]

@@ -11,12 +11,12 @@ import jsonschema
 import pytest
 
 from llm_grop.api import make_llm, run
+from llm_grop.contract.models import ArrangementDoc, RunDoc
+from llm_grop.contract.run_json import run_to_dict
+from llm_grop.contract.schemas import DOCUMENTS, json_schema, schema_text
+from llm_grop.contract.serialize import arrangement_from_dict, arrangement_to_dict, read_doc
 from llm_grop.errors import BadInput
 from llm_grop.llm.base import BackendOptions
-from llm_grop.world.contract import ArrangementDoc, RunDoc
-from llm_grop.world.run_json import run_to_dict
-from llm_grop.world.schemas import DOCUMENTS, json_schema, schema_text
-from llm_grop.world.serialize import arrangement_from_dict, arrangement_to_dict, read_doc
 from scripted import TASK1_GOOD, scripted
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -12,12 +12,12 @@ import pytest
 
 from cli_support import one_line_error
 from llm_grop.cli import main
+from llm_grop.contract.serialize import arrangement_from_dict, arrangement_to_dict
 from llm_grop.errors import BadInput
+from llm_grop.files.scene_file import load_scene, parse_scene, scene_to_dict, set_target_top
 from llm_grop.world.arrangement import Arrangement
 from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.scene import SceneTable
-from llm_grop.world.scene_file import load_scene, parse_scene, scene_to_dict, set_target_top
-from llm_grop.world.serialize import arrangement_from_dict, arrangement_to_dict
 from llm_grop.world.table import Table
 
 RECORDING = Path(__file__).resolve().parents[2] / "benchmarks" / "data" / "embedded_calls.jsonl"

@@ -15,10 +15,10 @@ from shapely.geometry import Polygon
 from shapely.geometry import box as rect
 
 from llm_grop.errors import BadInput
+from llm_grop.files.scene_file import load_scene, parse_scene, scene_to_dict
 from llm_grop.world.geometry2d import Box, Pose2D
 from llm_grop.world.robot import Robot
 from llm_grop.world.scene import Chair, ObjectSource, Scene
-from llm_grop.world.scene_file import load_scene, parse_scene, scene_to_dict
 
 ROOM = """
 name: test

@@ -26,11 +26,11 @@ from pydantic import BaseModel, StringConstraints
 
 from llm_grop.arrangement import consistency
 from llm_grop.arrangement.distances import parse_distance_cm
+from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import BadInput
 from llm_grop.language.answer_reader import parse_relations
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.datafile import load_yaml_model
 from llm_grop.world.relation import DIRECTION, Choice, Relation
 from llm_grop.world.request import items_from_names
 from llm_grop.world.table import Table

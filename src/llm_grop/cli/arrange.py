@@ -44,8 +44,8 @@ def arrange(request: str | None, json_path: Path | None, image_path: Path | None
     from rich.console import Console
 
     from llm_grop.api import arrange as api_arrange
-    from llm_grop.world.jsonio import write_json
-    from llm_grop.world.serialize import arrangement_to_dict
+    from llm_grop.contract.serialize import arrangement_to_dict
+    from llm_grop.files.jsonio import write_json
 
     check_request("arrange", request, params["task"])
     settings = checked_settings(params, cache=cache_setting(params["cache"], no_cache))

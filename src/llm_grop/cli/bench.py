@@ -176,10 +176,10 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     from llm_grop.assembly import make_backend, make_simulator
     from llm_grop.experiment.runner import Experiment
     from llm_grop.experiment.trial import TrialSettings
+    from llm_grop.files.scene_file import load_scene, set_target_top
     from llm_grop.llm.registry import BACKENDS
     from llm_grop.methods.registry import get_method
     from llm_grop.planning.feasibility import feasibility_profile
-    from llm_grop.world.scene_file import load_scene, set_target_top
     from llm_grop.world.table import Table
     from llm_grop.world.tasks import load_tasks
 

@@ -66,9 +66,9 @@ def rate(file: Path, request_text: str | None, json_path: Path | None,
     from rich.table import Table as RichTable
 
     from llm_grop.evaluation.rater import rate as rate_arrangement
+    from llm_grop.files.jsonio import write_json
     from llm_grop.language.request import parse_request
     from llm_grop.world.catalog import Catalog
-    from llm_grop.world.jsonio import write_json
 
     arrangement, run_request, where = read_rating_input(file)
     catalog = Catalog.load(catalog_files)

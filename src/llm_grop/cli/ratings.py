@@ -144,9 +144,9 @@ def serve(db: Path, host: str, port: int, admin_token: str | None,
               help="Where to write the ratings as CSV ('-': standard output).")
 def export(db: Path, csv_path: Path) -> None:
     """Write every rating, with its trial and method, as CSV."""
+    from llm_grop.files.jsonio import write_text
     from llm_grop.ratings.db import connect
     from llm_grop.ratings.store import RatingStore, export_csv
-    from llm_grop.world.jsonio import write_text
 
     to_stdout = str(csv_path) == "-"
     if not to_stdout:

@@ -65,8 +65,8 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
 
     from llm_grop.api import run as api_run
     from llm_grop.cli.console import print_run
-    from llm_grop.world.jsonio import write_json
-    from llm_grop.world.run_json import run_to_dict
+    from llm_grop.contract.run_json import run_to_dict
+    from llm_grop.files.jsonio import write_json
 
     check_request("run", request, params["task"])
     settings = checked_settings(params, cache=cache_setting(params["cache"], no_cache))

@@ -6,7 +6,7 @@ import click
 
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
-from llm_grop.world.schemas import DOCUMENTS, schema_text
+from llm_grop.contract.schemas import DOCUMENTS, schema_text
 
 
 @click.command(epilog=EPILOG)

@@ -91,7 +91,7 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
     from llm_grop.experiment.summary import rich_table
     from llm_grop.experiment.sweep import MARKER, load_sweep
     from llm_grop.experiment.sweep_report import sweep_rows, write_sweep_reports
-    from llm_grop.world.jsonio import write_json
+    from llm_grop.files.jsonio import write_json
 
     check_out_dir("out", out_dir)
     if out_dir.is_dir() and any(out_dir.iterdir()) and not (out_dir / MARKER).exists():

@@ -50,6 +50,7 @@ from llm_grop.env.bounds import (
 from llm_grop.errors import BadInput
 from llm_grop.execution import ExecutionPolicy
 from llm_grop.execution.judge import judged_place
+from llm_grop.files.scene_file import load_scene
 from llm_grop.planning.navigation import Navigator
 from llm_grop.render.room import room_image
 from llm_grop.simulation.base import Session, Simulator
@@ -59,7 +60,6 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.request import items_from_names
 from llm_grop.world.scene import Scene
-from llm_grop.world.scene_file import load_scene
 from llm_grop.world.tasks import load_tasks
 
 NAVIGATE, PICK, PLACE = 0, 1, 2

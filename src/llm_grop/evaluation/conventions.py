@@ -15,8 +15,8 @@ from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import BadInput
-from llm_grop.world.datafile import load_yaml_model
 
 _Pair = tuple[float, float]
 

@@ -14,10 +14,10 @@ from collections.abc import Sequence
 
 from shapely import affinity
 
+from llm_grop.contract.models import ArrangementDoc, ObjectDoc, TableDoc
+from llm_grop.contract.serialize import table_of
 from llm_grop.errors import BadInput
 from llm_grop.geometry.places import outline, places
-from llm_grop.world.contract import ArrangementDoc, ObjectDoc, TableDoc
-from llm_grop.world.serialize import table_of
 
 
 def several_diners(doc: ArrangementDoc) -> bool:

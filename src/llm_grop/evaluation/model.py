@@ -1,7 +1,7 @@
 """What the rater reads and reports: the checked objects, and one check's outcome.
 
 :func:`read_setting` turns the contract's arrangement document (validated by
-:class:`~llm_grop.world.contract.ArrangementDoc`, possibly written by hand or by another
+:class:`~llm_grop.contract.models.ArrangementDoc`, possibly written by hand or by another
 system) into :class:`Setting`. It uses ``table`` and ``objects`` only, never
 ``relations`` or ``llm``. What the contract's model cannot check (a name used twice, a
 support that is not there, a circle that is not round) raises
@@ -22,12 +22,12 @@ from typing import Literal
 from shapely.geometry import Point, Polygon
 from shapely.geometry.base import BaseGeometry
 
+from llm_grop.contract.models import ArrangementDoc, ObjectDoc
 from llm_grop.errors import BadInput
 from llm_grop.evaluation.conventions import Conventions
 from llm_grop.geometry.footprint import footprint
 from llm_grop.world.arrangement import UPRIGHT_TILT_RAD
 from llm_grop.world.catalog import Catalog, normalize_name
-from llm_grop.world.contract import ArrangementDoc, ObjectDoc
 
 Severity = Literal["missing", "major", "minor"]
 SEVERITIES: tuple[Severity, ...] = ("missing", "major", "minor")

@@ -28,6 +28,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
+from llm_grop.contract.models import ArrangementDoc, CheckDoc, RatingDoc
+from llm_grop.contract.serialize import read_doc
 from llm_grop.errors import BadInput
 from llm_grop.evaluation.context import make_context
 from llm_grop.evaluation.conventions import Conventions, load_conventions
@@ -36,8 +38,6 @@ from llm_grop.evaluation.model import Check, Setting, kind_of, read_setting
 from llm_grop.evaluation.rules import RULES
 from llm_grop.language.request import parse_request
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.contract import ArrangementDoc, CheckDoc, RatingDoc
-from llm_grop.world.serialize import read_doc
 
 #: The arrangement JSON's fields the rater reads.
 _RATED = ("request", "table", "objects", "request_read_by")
@@ -119,7 +119,7 @@ def rate(arrangement: Mapping[str, Any] | ArrangementDoc, requested: Sequence[st
          catalog: Catalog | None = None, *, conventions: Conventions | None = None,
          where: str = "arrangement") -> Rating:
     """Score ``arrangement`` (the contract's arrangement JSON, as a dict or a validated
-    :class:`~llm_grop.world.contract.ArrangementDoc`) from 1 to 5.
+    :class:`~llm_grop.contract.models.ArrangementDoc`) from 1 to 5.
 
     ``requested`` are catalog item names ("dinner fork", "dinner fork 2", a synonym
     such as "fork"); when ``None`` they are read from the JSON's ``request`` text

@@ -1,6 +1,6 @@
 """A results directory's trial rows, ``trials.jsonl``: reading them and writing them.
 
-One :class:`~llm_grop.world.contract.TrialRow` a line, appended and synced as each trial
+One :class:`~llm_grop.contract.models.TrialRow` a line, appended and synced as each trial
 ends, rewritten atomically. This module runs no pipeline (it imports records only), so
 what reads results without running trials, such as the rating site, reads them here
 (:func:`llm_grop.experiment.runner.read_rows` is this one too).
@@ -14,9 +14,9 @@ import os
 import secrets
 from pathlib import Path
 
+from llm_grop.contract.models import TrialRow
+from llm_grop.contract.serialize import read_doc
 from llm_grop.errors import BadInput
-from llm_grop.world.contract import TrialRow
-from llm_grop.world.serialize import read_doc
 
 log = logging.getLogger(__name__)
 

@@ -5,7 +5,7 @@ An output directory holds one experiment:
 * ``experiment.json``: what makes results comparable (LLM, scene, chairs, sampler and
   planner settings, simulator, task and catalog files, version). A directory holding a different
   experiment is refused, so results are never mixed.
-* ``trials.jsonl``: one :class:`~llm_grop.world.contract.TrialRow` per finished trial,
+* ``trials.jsonl``: one :class:`~llm_grop.contract.models.TrialRow` per finished trial,
   appended and flushed as each one ends, so
   an interrupted run loses no finished trial. A rerun skips the trials already there.
   When every trial is done the file is rewritten in ``(task, trial, method)`` order
@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from llm_grop import locking, plugins
+from llm_grop.contract.models import TrialRow
 from llm_grop.errors import BadInput, LLMTransient
 from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
 from llm_grop.experiment.paired import PairedComparison, paired_by_trial
@@ -55,11 +56,10 @@ from llm_grop.experiment.rows import (
 from llm_grop.experiment.summary import Summary, summarize, summary_markdown, summary_to_dict
 from llm_grop.experiment.trial import TrialSettings, TrialSpec
 from llm_grop.experiment.worker import Job
+from llm_grop.files.jsonio import write_bytes, write_json, write_text
 from llm_grop.llm.registry import BACKENDS
 from llm_grop.methods.registry import METHODS
 from llm_grop.simulation.registry import SIMULATORS
-from llm_grop.world.contract import TrialRow
-from llm_grop.world.jsonio import write_bytes, write_json, write_text
 
 log = logging.getLogger(__name__)
 

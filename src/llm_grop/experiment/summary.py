@@ -1,6 +1,6 @@
 """Aggregate benchmark trials into the paper's figures of merit (Sec. IV).
 
-The benchmark writes one :class:`~llm_grop.world.contract.TrialRow` per trial: among
+The benchmark writes one :class:`~llm_grop.contract.models.TrialRow` per trial: among
 others ``method``, ``task``, ``success``, ``rating`` (1-5), ``execution_time_s`` (seconds,
 ``None`` when no plan existed) and ``planning_time_s`` (seconds, or ``None``).
 :func:`summarize` reduces them to means and standard errors per method (Fig. 3: rating
@@ -20,9 +20,9 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table as RichTable
 
+from llm_grop.contract.models import TrialRow
+from llm_grop.contract.serialize import read_doc
 from llm_grop.experiment.paired import PairedComparison
-from llm_grop.world.contract import TrialRow
-from llm_grop.world.serialize import read_doc
 
 #: The paper's methods, in the order its figures list them; others follow, first seen first.
 PAPER_ORDER = ("tpra", "latp", "grop", "llm-grop")

@@ -56,9 +56,9 @@ from pydantic import (
     field_validator,
 )
 
+from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import BadInput
 from llm_grop.settings import RunSettings, door
-from llm_grop.world.datafile import load_yaml_model
 
 #: Longest cell directory name, in characters (a file system allows 255 bytes).
 MAX_NAME = 120

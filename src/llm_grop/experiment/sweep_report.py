@@ -17,7 +17,7 @@ from llm_grop.experiment.plots import plot_sweep
 from llm_grop.experiment.runner import Report, read_rows, write_reports
 from llm_grop.experiment.summary import md_row, mean_se, rate_text, summary_to_dict
 from llm_grop.experiment.sweep import Sweep
-from llm_grop.world.jsonio import write_json, write_text
+from llm_grop.files.jsonio import write_json, write_text
 
 #: What :func:`write_sweep_reports` writes into the sweep's directory.
 FILES = ("summary.md", "summary.json", "fig_sweep.png")

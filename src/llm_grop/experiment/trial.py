@@ -2,7 +2,7 @@
 
 A trial runs the whole pipeline (:func:`llm_grop.api.run`), rates the final arrangement
 with the automatic rater, draws the final table as the paper's raters saw it, and returns
-one :class:`~llm_grop.world.contract.TrialRow`: the contract's run JSON (without the LLM's
+one :class:`~llm_grop.contract.models.TrialRow`: the contract's run JSON (without the LLM's
 call log) plus the rating, its checks and per-trial counts. A trial whose arrangement or
 plan is infeasible still gives a row (``status`` ``"infeasible"``, nothing on the table,
 rated accordingly), and so does one whose LLM could not answer after its retries
@@ -19,8 +19,12 @@ from typing import Any
 from llm_grop.api import run
 from llm_grop.arrangement.diners import seat_items
 from llm_grop.assembly import call_log, make_backend, make_simulator
+from llm_grop.contract.models import TrialRow
+from llm_grop.contract.run_json import run_doc
+from llm_grop.contract.serialize import arrangement_doc
 from llm_grop.errors import Infeasible, LLMTransient
 from llm_grop.evaluation.rater import rate
+from llm_grop.files.scene_file import load_scene, set_target_top
 from llm_grop.llm.base import LLM, BackendOptions, CallLog
 from llm_grop.methods.registry import get_method
 from llm_grop.render.raster import save_rgb_png
@@ -28,12 +32,8 @@ from llm_grop.render.table import draw_arrangement
 from llm_grop.settings import DEFAULTS, RunSettings
 from llm_grop.world.arrangement import Arrangement
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.contract import TrialRow
 from llm_grop.world.request import items_from_names
-from llm_grop.world.run_json import run_doc
 from llm_grop.world.scene import Scene
-from llm_grop.world.scene_file import load_scene, set_target_top
-from llm_grop.world.serialize import arrangement_doc
 from llm_grop.world.table import Table
 from llm_grop.world.tasks import Task, load_tasks
 

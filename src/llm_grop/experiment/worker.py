@@ -15,8 +15,8 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 
+from llm_grop.contract.models import TrialRow
 from llm_grop.experiment.trial import TrialRunner, TrialSettings, TrialSpec
-from llm_grop.world.contract import TrialRow
 
 #: Runners a worker keeps (a sweep's jobs come cell by cell, so a worker rarely needs an
 #: older one again).

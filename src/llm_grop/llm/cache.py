@@ -120,7 +120,7 @@ class LLMCache:
         raised (the call itself succeeded)."""
         path = self._path(key)
         data = {"key": asdict(key), "record": asdict(replace(record, cached=False))}
-        # Not world.jsonio's writer: the LLM layer stands below the world. No fsync: an
+        # Not files.jsonio's writer: the LLM layer stands below the files. No fsync: an
         # entry lost to a power cut is only asked again.
         tmp = path.with_name(f".{path.stem}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
         try:

@@ -14,7 +14,7 @@ the :class:`FeasibilityModel` protocol, so a learned model can replace them.
   falls smoothly (cosine) to 0 at ``reach_max``, and is 0 beyond it or below ``reach_min``.
 
 Named profiles of the parametric model live in ``data/feasibility.yaml``
-(:mod:`llm_grop.world.profiles`): ``default`` (assumed, the paper's black box) and
+(:mod:`llm_grop.files.profiles`): ``default`` (assumed, the paper's black box) and
 ``mujoco`` (fitted to episodes run through the executive in the 3D world by
 ``benchmarks/fit_profile.py``), with the actions' expected durations. Choose one with
 ``--feasibility NAME``.
@@ -28,7 +28,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from llm_grop.world.profiles import Curves, load_profile, profile_names
+from llm_grop.files.profiles import Curves, load_profile, profile_names
 from llm_grop.world.robot import Robot
 
 __all__ = ["DEFAULT_FEASIBILITY", "ActionTimes", "FeasibilityModel",
@@ -64,7 +64,7 @@ class FeasibilityModel(Protocol):
 @dataclass(frozen=True)
 class ParametricFeasibility(Curves):
     """The documented parametric model (see the module docstring and
-    :class:`~llm_grop.world.profiles.Curves`, which holds its numbers)."""
+    :class:`~llm_grop.files.profiles.Curves`, which holds its numbers)."""
 
     def navigation(self, clearance_m: ArrayLike) -> Floats:
         return self.navigation_p(clearance_m)

@@ -28,6 +28,7 @@ from starlette.datastructures import MutableHeaders
 from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from llm_grop.datafile import problem_line
 from llm_grop.ratings.db import connect
 from llm_grop.ratings.pages import STATIC, render
 from llm_grop.ratings.store import (
@@ -39,7 +40,6 @@ from llm_grop.ratings.store import (
     image_url,
 )
 from llm_grop.web import GONE, TOO_LARGE, read_body, replaying, same_origin
-from llm_grop.world.datafile import problem_line
 
 COOKIE = "llm_grop_session"
 CSRF_HEADER = "X-CSRF-Token"

@@ -41,8 +41,8 @@ from llm_grop.experiment.summary import (
     summary_tables,
     summary_to_dict,
 )
+from llm_grop.files.jsonio import write_json, write_text
 from llm_grop.ratings.pages import STATIC, render
-from llm_grop.world.jsonio import write_json, write_text
 
 FIG3 = "fig3_rating_vs_time.png"
 FIG5 = "fig5_rating_per_task.png"

@@ -26,13 +26,13 @@ import numpy as np
 from PIL import Image, UnidentifiedImageError
 
 from llm_grop import seeds
+from llm_grop.contract.models import TrialRow
 from llm_grop.errors import BadInput
 from llm_grop.experiment.rows import ROWS, read_rows
 from llm_grop.experiment.sweep import cell_dirs
 from llm_grop.language.request import parse_request
 from llm_grop.ratings.db import connect, transaction
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.contract import TrialRow
 
 #: Letters of invite codes: no 0/O, 1/I/L or U/V to confuse.
 CODE_ALPHABET = "ABCDEFGHJKMNPQRSTWXYZ23456789"

@@ -9,10 +9,10 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
+from llm_grop.contract.models import ArrangementDoc, RelationDoc, RunDoc
+from llm_grop.contract.plan_doc import PlanJSON
+from llm_grop.datafile import problem_line
 from llm_grop.settings import DEFAULTS, RunSettings, help_text
-from llm_grop.world.contract import ArrangementDoc, RelationDoc, RunDoc
-from llm_grop.world.datafile import problem_line
-from llm_grop.world.plan_doc import PlanJSON
 from llm_grop.world.request import MAX_DINERS, MAX_REQUEST_CHARS
 from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
 
@@ -230,5 +230,5 @@ def one_line(errors: Sequence[Any], raw: Any = None, model: Any = None,
              where: str | None = "body") -> str:
     """The first of pydantic's validation ``errors`` about the body ``raw`` (of ``model``)
     as ``field: reason``, in the words of the project's data files
-    (:func:`~llm_grop.world.datafile.problem_line`)."""
+    (:func:`~llm_grop.datafile.problem_line`)."""
     return problem_line(errors, raw, model, where=where)

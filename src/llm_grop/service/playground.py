@@ -21,6 +21,7 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import ValidationError
 from starlette.concurrency import run_in_threadpool
 
+from llm_grop.contract.models import ArrangementDoc
 from llm_grop.service.http import Refused
 from llm_grop.service.jobs import Job
 from llm_grop.service.models import (
@@ -32,7 +33,6 @@ from llm_grop.service.models import (
 )
 from llm_grop.service.service import Service, StillRunning
 from llm_grop.web import same_origin
-from llm_grop.world.contract import ArrangementDoc
 
 HISTORY_COOKIE = "llm_grop_history"
 #: Results the history cookie keeps.

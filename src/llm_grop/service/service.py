@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from starlette.concurrency import run_in_threadpool
 
+from llm_grop.contract.models import ArrangementDoc
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.http import Refused
 from llm_grop.service.jobs import Job, JobStore, Kind, Overloaded
@@ -20,7 +21,6 @@ from llm_grop.service.models import (
     RunBody,
     reading,
 )
-from llm_grop.world.contract import ArrangementDoc
 
 #: Seconds between looks at a job a request waits for.
 WAIT_POLL_S = 0.02

@@ -100,7 +100,7 @@ def _check_size(count: int, config: ServiceConfig) -> None:
 def _arrange(body: ArrangeBody, config: ServiceConfig, llms: Backends,
              on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
     from llm_grop.api import arrange
-    from llm_grop.world.serialize import arrangement_to_dict
+    from llm_grop.contract.serialize import arrangement_to_dict
 
     result = arrange(body.request, _settings(body), llm=llms.log(body.llm),
                      table=_table(body), on_event=on_event)
@@ -121,7 +121,7 @@ def _table_pictures(arrangement: Any, scratch: Path) -> Files:
 def _scene(body: PlanBody) -> Any:
     """The room the body describes: its inline scene (or the packaged one) with the sensed
     chairs and the robot's pose it gives; ``None`` for the packaged room as it is."""
-    from llm_grop.world.scene_file import load_scene, parse_scene, scene_to_dict
+    from llm_grop.files.scene_file import load_scene, parse_scene, scene_to_dict
 
     if body.scene is None and body.chairs is None and body.robot is None:
         return None
@@ -142,7 +142,7 @@ def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
              on_event: Callable[[str], None], check: Callable[..., None] | None = None
              ) -> Any:
     from llm_grop.api import plan
-    from llm_grop.world.serialize import arrangement_from_dict
+    from llm_grop.contract.serialize import arrangement_from_dict
 
     if sum(x is not None for x in (body.request, body.task, body.arrangement)) != 1:
         raise BadInput("request: give one of request, task or arrangement")
@@ -175,9 +175,9 @@ def _plan(body: PlanBody, config: ServiceConfig, llms: Backends,
 def _run(body: RunBody, config: ServiceConfig, llms: Backends,
          on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
     from llm_grop.api import execute
+    from llm_grop.contract.run_json import run_to_dict
     from llm_grop.render.room import draw_run
     from llm_grop.simulation.registry import create_simulator, simulator_class
-    from llm_grop.world.run_json import run_to_dict
 
     renders = simulator_class(body.simulator).supports_pictures
     with tempfile.TemporaryDirectory(prefix="run-", dir=config.scratch) as tmp:

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Protocol
 
-from llm_grop.world.profiles import Curves, load_profile
+from llm_grop.files.profiles import Curves, load_profile
 from llm_grop.world.robot import Robot
 
 
@@ -39,7 +39,7 @@ class Outcomes(Protocol):
 @dataclass(frozen=True)
 class ParametricOutcomes(Curves):
     """The parametric truth described in the module docstring, one action at a time; its
-    numbers (:class:`~llm_grop.world.profiles.Curves`) include how long actions take: a
+    numbers (:class:`~llm_grop.files.profiles.Curves`) include how long actions take: a
     pick or place attempt takes ``pick_time_s`` or ``place_time_s`` (``None``: the
     robot's) whether it succeeds or not, and ``leg_overhead_s`` is added to every drive.
     (``failed_attempt_s``, what the planner expects a failure to cost with its recovery,
@@ -48,7 +48,7 @@ class ParametricOutcomes(Curves):
 
     @classmethod
     def from_profile(cls, name: str) -> ParametricOutcomes:
-        """The truth of the packaged profile ``name`` (:mod:`llm_grop.world.profiles`);
+        """The truth of the packaged profile ``name`` (:mod:`llm_grop.files.profiles`);
         :class:`~llm_grop.errors.BadInput` for an unknown one."""
         return cls(**asdict(load_profile(name, "truth").curves))
 

@@ -18,9 +18,9 @@ from shapely.geometry import box as rect
 
 from llm_grop import seeds
 from llm_grop.errors import BadInput, Infeasible
+from llm_grop.files.jsonio import rounded
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Box, Disc
-from llm_grop.world.jsonio import rounded
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
 
 #: Smallest radius of the disc an object occupies on a supply table while it waits, metres;

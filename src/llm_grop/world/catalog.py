@@ -20,8 +20,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import CatalogError, UnknownObject
-from llm_grop.world.datafile import load_yaml_model
 
 #: Environment variable holding extra catalog files, separated by ``os.pathsep``.
 CATALOG_ENV = "LLM_GROP_CATALOG"

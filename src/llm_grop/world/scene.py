@@ -138,7 +138,7 @@ class Scene:
     def with_target_top(self, top: Table) -> Scene:
         """This scene with the target table's top replaced by ``top`` (same centre, yaw
         and height). Nothing is checked here; see
-        :func:`llm_grop.world.scene_file.set_target_top`."""
+        :func:`llm_grop.files.scene_file.set_target_top`."""
         t = self.target_table
         box = replace(t.box, width=top.width, depth=top.depth)
         tables = tuple(replace(t, box=box, shape=top.shape) if u.name == t.name else u

@@ -15,8 +15,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, StringConstraints
 
+from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import BadInput
-from llm_grop.world.datafile import load_yaml_model
 
 _Name = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]
 

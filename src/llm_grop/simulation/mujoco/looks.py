@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from llm_grop.world.datafile import load_yaml_model
+from llm_grop.datafile import load_yaml_model
 
 #: Geom group of collision geoms hidden behind a look: renders leave it out, the lidar
 #: sees it.

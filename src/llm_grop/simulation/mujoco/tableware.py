@@ -19,10 +19,10 @@ from typing import Literal
 import mujoco
 from pydantic import BaseModel, ConfigDict, Field
 
+from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import BadInput
 from llm_grop.simulation.mujoco import looks
 from llm_grop.world.arrangement import Placement
-from llm_grop.world.datafile import load_yaml_model
 
 Style = Literal["plate", "cylinder", "mug", "disk", "box", "bread", "berry"]
 

@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field, RootModel
 
+from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import BadInput
-from llm_grop.world.datafile import load_yaml_model
 from llm_grop.world.robot import Robot
 
 Floats = NDArray[np.float64]

@@ -40,10 +40,10 @@ from pydantic import (
 from shapely.geometry import Point, Polygon
 from shapely.geometry import box as rect
 
+from llm_grop.datafile import load_yaml_model, unknown_key
 from llm_grop.errors import BadInput
-from llm_grop.world.datafile import load_yaml_model, unknown_key
+from llm_grop.files.jsonio import rounded
 from llm_grop.world.geometry2d import Box, Disc, Pose2D
-from llm_grop.world.jsonio import rounded
 from llm_grop.world.robot import Robot
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
 from llm_grop.world.seat import Seat

@@ -7,8 +7,8 @@ import json
 import re
 from typing import Any
 
-from llm_grop.world.contract import ArrangementDoc, Doc, RunDoc, TrialRow
-from llm_grop.world.plan_doc import PlanJSON
+from llm_grop.contract.models import ArrangementDoc, Doc, RunDoc, TrialRow
+from llm_grop.contract.plan_doc import PlanJSON
 
 #: The published documents, by the name ``llm-grop schema`` takes.
 DOCUMENTS: dict[str, type[Doc]] = {
@@ -36,7 +36,7 @@ def _plain(node: Any) -> Any:
     return node
 
 
-#: A reference such as ``x`` or :class:`~llm_grop.world.contract.Doc` (kept: x, Doc).
+#: A reference such as ``x`` or :class:`~llm_grop.contract.models.Doc` (kept: x, Doc).
 _PLAIN = re.compile(r"(?::\w+:`~?(?:\w+\.)*)?`{1,2}([^`]+?)`{1,2}")
 
 

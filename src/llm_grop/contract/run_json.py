@@ -1,5 +1,5 @@
 """The contract's run JSON (``llm-grop run --json``), built from a :class:`RunResult` as a
-:class:`~llm_grop.world.contract.RunDoc`.
+:class:`~llm_grop.contract.models.RunDoc`.
 
 Besides the contract's fields it holds the planned arrangement, the plan's expected
 utility, feasibility and cost, the failures, the simulator, and the scene with the sensed
@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from llm_grop.world.contract import (
+from llm_grop.contract.models import (
     ConsideredDoc,
     FidelityDoc,
     GapDoc,
@@ -22,12 +22,12 @@ from llm_grop.world.contract import (
     StandingDoc,
     StepDoc,
 )
+from llm_grop.contract.serialize import arrangement_doc
+from llm_grop.files.jsonio import rounded
+from llm_grop.files.scene_file import SceneFile, scene_to_dict
 from llm_grop.world.fidelity import Considered, Fidelity
 from llm_grop.world.geometry2d import Pose2D
-from llm_grop.world.jsonio import rounded
 from llm_grop.world.plan import ExecutedStep, Plan, RunResult
-from llm_grop.world.scene_file import SceneFile, scene_to_dict
-from llm_grop.world.serialize import arrangement_doc
 
 
 def pose_list(p: Pose2D) -> tuple[float, float, float]:

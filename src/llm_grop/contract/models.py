@@ -21,9 +21,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, Strict, model_validator
 
+from llm_grop.files.scene_file import SceneFile
 from llm_grop.world.plan import Reason
 from llm_grop.world.relation import RELATION_NAMES
-from llm_grop.world.scene_file import SceneFile
 
 
 def _not_blank(text: str) -> str:

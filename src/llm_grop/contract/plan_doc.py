@@ -17,8 +17,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import ConfigDict, Field
 
-from llm_grop.world.arrangement import Arrangement
-from llm_grop.world.contract import (
+from llm_grop.contract.models import (
     ArrangementDoc,
     Doc,
     Int,
@@ -29,12 +28,13 @@ from llm_grop.world.contract import (
     Seconds,
     Text,
 )
+from llm_grop.contract.run_json import plan_doc
+from llm_grop.contract.serialize import arrangement_doc, arrangement_from_dict, read_doc
+from llm_grop.files.scene_file import SceneFile, parse_scene, scene_to_dict
+from llm_grop.world.arrangement import Arrangement
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import Plan, Step
-from llm_grop.world.run_json import plan_doc
 from llm_grop.world.scene import Scene
-from llm_grop.world.scene_file import SceneFile, parse_scene, scene_to_dict
-from llm_grop.world.serialize import arrangement_doc, arrangement_from_dict, read_doc
 
 Probability = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 

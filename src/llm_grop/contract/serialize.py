@@ -1,14 +1,12 @@
 """The one place where arrangement records turn into the contract's JSON and back, through
-the models of :mod:`llm_grop.world.contract`."""
+the models of :mod:`llm_grop.contract.models`."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-from llm_grop.errors import BadInput
-from llm_grop.world.arrangement import Arrangement, Placement
-from llm_grop.world.contract import (
+from llm_grop.contract.models import (
     ArrangementDoc,
     Doc,
     LLMCallDoc,
@@ -17,8 +15,10 @@ from llm_grop.world.contract import (
     RelationDoc,
     TableDoc,
 )
-from llm_grop.world.datafile import validated
-from llm_grop.world.jsonio import rounded
+from llm_grop.datafile import validated
+from llm_grop.errors import BadInput
+from llm_grop.files.jsonio import rounded
+from llm_grop.world.arrangement import Arrangement, Placement
 from llm_grop.world.llmlog import CallRecord, LLMSummary
 from llm_grop.world.relation import Relation
 from llm_grop.world.seat import Seat
