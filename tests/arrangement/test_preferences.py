@@ -121,6 +121,8 @@ def test_a_stated_distance_from_the_edge_replaces_the_question(chat_server) -> N
 @pytest.mark.parametrize("sentence, error", [
     ("the dinner plate from the diner's edge", "no distance from the edge"),
     ("the dinner plate -3 cm from the diner's edge", "must not be negative"),
+    # Any dash of the one table is a minus sign, as it is to the distance reader.
+    ("the dinner plate \u20133 cm from the diner's edge", "must not be negative"),
     ("the dinner plate 90 cm from the edge", "does not fit"),
     ("the mug 3 cm from the edge", "names no requested object"),
 ])

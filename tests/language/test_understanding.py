@@ -161,6 +161,9 @@ def test_nothing_named_even_after_the_llm_is_bad_input(chat_server: ChatServer,
     (answer(("dinner plate", 1, ""), ("dinner fork", 1, ""), relations=(
         {"subject": "dinner fork", "relation": "to the left of", "reference": "dinner plate",
          "distance_cm": -2},)), "a distance must not be negative"),
+    (answer(("dinner plate", 1, ""), ("dinner fork", 1, ""), relations=(
+        {"subject": "dinner fork", "relation": "to the left of", "reference": "dinner plate",
+         "distance_cm": "\u20132 cm"},)), "a distance must not be negative"),
 ])
 def test_the_reading_is_checked_before_any_arranging(reply: str, message: str | None,
                                                      chat_server: ChatServer,

@@ -10,9 +10,9 @@ from matplotlib.image import imread
 
 from llm_grop.errors import BadInput
 from llm_grop.render import draw_arrangement
-from llm_grop.render.table import BACKGROUND, DPI, FIGSIZE_IN, TABLE_FACE
+from llm_grop.render.table import BACKGROUND, DPI, FIGSIZE_IN, TABLE_FACE, relation_label
 from llm_grop.world.arrangement import Arrangement, Placement
-from llm_grop.world.relation import Relation
+from llm_grop.world.relation import MEANINGS, Relation
 from llm_grop.world.table import Table
 
 REQUEST = "set the table with a dinner plate, a dinner fork and a dinner knife"
@@ -158,3 +158,16 @@ def test_bad_paths_are_bad_input(tmp_path: Path) -> None:
         draw_arrangement(Arrangement(REQUEST, Table(), (PLATE,)),
                          tmp_path / "missing" / "out.png")
     assert not (tmp_path / "missing").exists()
+
+
+def test_relation_labels_are_the_relations_table_names_shortened() -> None:
+    # The labels the pictures had when they were a table of their own.
+    before = {"to the left of": "left of", "to the right of": "right of", "above": "above",
+              "below": "below", "above and to the left of": "above-left of",
+              "above and to the right of": "above-right of",
+              "below and to the left of": "below-left of",
+              "below and to the right of": "below-right of", "center": "center"}
+    assert {name: relation_label(name) for name in before} == before
+    assert set(before) <= set(MEANINGS)
+    labels = [relation_label(name) for name in MEANINGS]
+    assert len(set(labels)) == len(labels)

@@ -11,7 +11,6 @@ turned into the table frame. Nothing here knows any place-setting convention.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -23,6 +22,7 @@ from llm_grop.arrangement.sampling import violations
 from llm_grop.arrangement.setting import Sampled, Setting
 from llm_grop.errors import BadInput, Infeasible
 from llm_grop.geometry.places import Place, default_seats, places
+from llm_grop.world.angles import wrap_angle
 from llm_grop.world.arrangement import Configuration, Item, Placement
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.fidelity import Fidelity, GapFidelity
@@ -122,7 +122,7 @@ def _to_table(config: Configuration, place: Place, diner: int) -> list[Placement
     out = []
     for p in config.placements:
         x, y = place.to_table(p.x, p.y)
-        out.append(replace(p, x=float(x), y=float(y), yaw=_wrap(p.yaw + place.yaw),
+        out.append(replace(p, x=float(x), y=float(y), yaw=wrap_angle(p.yaw + place.yaw),
                            diner=diner))
     return out
 
@@ -187,7 +187,7 @@ def in_place_frames(placements: Sequence[Placement], table: Table
         local = []
         for p in mine:
             x, y = place.to_place(p.x, p.y)
-            local.append(replace(p, x=float(x), y=float(y), yaw=_wrap(p.yaw - place.yaw)))
+            local.append(replace(p, x=float(x), y=float(y), yaw=wrap_angle(p.yaw - place.yaw)))
         out.append((place, local))
     return out
 
@@ -207,10 +207,3 @@ def violations_at_table(config: Configuration, relations: Sequence[Relation],
         out += violations(Configuration(tuple(local)), mine, place.box, place.region)
     return out
 
-
-def _wrap(angle: float) -> float:
-    """``angle`` in radians wrapped to ``(-pi, pi]``, exactly 0 for a multiple of 2 pi."""
-    a = math.remainder(angle, 2 * math.pi)
-    if abs(a) < 1e-12:
-        return 0.0
-    return math.pi if math.isclose(a, -math.pi) else a

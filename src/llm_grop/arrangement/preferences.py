@@ -29,6 +29,7 @@ from llm_grop.arrangement.distances import parse_distance_cm
 from llm_grop.datafile import load_yaml_model
 from llm_grop.errors import BadInput
 from llm_grop.language.answer_reader import parse_relations
+from llm_grop.language.distance import DASHES
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.relation import DIRECTION, Choice, Relation
@@ -37,6 +38,8 @@ from llm_grop.world.table import Table
 
 #: "... from the diner's edge", "... from the near edge of the table", "... from the edge".
 _EDGE = re.compile(r"\bfrom\s+the\s+(?:diner['’]?s\s+|near(?:est)?\s+)?edge\b", re.IGNORECASE)
+#: A minus sign (any of the dashes) before a number, not inside a word or a range.
+_NEGATIVE = re.compile(rf"(?<![\w.])[{DASHES}]\s*\d")
 
 
 def is_edge_sentence(sentence: str) -> bool:
@@ -90,7 +93,7 @@ def read_edge_preferences(required: Sequence[str], pool: Sequence[str],
                                f"({', '.join(i.name for i in items)})")
             continue
         item, rest = found
-        if re.search(r"(?<![\w.])[-−]\s*\d", rest):
+        if _NEGATIVE.search(rest):
             raise _refused(param, sentence, "a distance must not be negative")
         cm = parse_distance_cm(rest)
         if cm is None:
@@ -125,7 +128,7 @@ def _refused(param: str | None, sentence: str, why: str) -> BadInput:
 
 def _with_gap(relation: Relation, sentence: str, param: str | None) -> Relation:
     """``relation`` as a preference, with the distance ``sentence`` states, if any."""
-    if re.search(r"(?<![\w.])[-−]\s*\d", sentence):
+    if _NEGATIVE.search(sentence):
         raise _refused(param, sentence, "a distance must not be negative")
     cm = parse_distance_cm(sentence)
     return replace(relation, source="preference", gap_m=None if cm is None else cm / 100)

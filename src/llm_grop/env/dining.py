@@ -29,7 +29,6 @@ built directly runs until ``max_steps`` actions when that is given, else without
 
 from __future__ import annotations
 
-import math
 import sys
 import warnings
 from collections.abc import Sequence
@@ -56,6 +55,7 @@ from llm_grop.render.room import room_image
 from llm_grop.simulation.base import Session, Simulator
 from llm_grop.simulation.registry import DEFAULT_SIMULATOR, create_simulator
 from llm_grop.simulation.scenario import prepare_episode
+from llm_grop.world.angles import wrap_angle
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.request import items_from_names
@@ -235,15 +235,15 @@ class DiningRoomEnv(gymnasium.Env):
         space = self.observation_space
         states = self.session.objects()
         r = self.session.robot_pose()
-        objects = np.array([(states[n].x, states[n].y, states[n].z, states[n].yaw)
+        # Wrapped before the float32 array rounds the yaw, so it is rounded once.
+        objects = np.array([(states[n].x, states[n].y, states[n].z, wrap_angle(states[n].yaw))
                             for n in self.names], np.float32)
-        objects[:, 3] = [_wrap(a) for a in objects[:, 3]]
         chairs = np.zeros((self.chairs, 5), np.float32)
         for k, c in enumerate(self.episode_scene.chairs[:self.chairs]):
-            chairs[k] = (c.box.x, c.box.y, c.box.width, c.box.depth, _wrap(c.box.yaw))
+            chairs[k] = (c.box.x, c.box.y, c.box.width, c.box.depth, wrap_angle(c.box.yaw))
         held = self.session.held
         obs: dict[str, Any] = {
-            "robot": _clip(np.array([r.x, r.y, _wrap(r.theta)], np.float32), space["robot"]),
+            "robot": _clip(np.array([r.x, r.y, wrap_angle(r.theta)], np.float32), space["robot"]),
             "objects": _clip(objects, space["objects"]),
             "held": self.names.index(held) if held in self.names else len(self.names),
             "on_table": np.array([n in self._on_table for n in self.names], np.int8),
@@ -270,10 +270,6 @@ def _beyond_unit(pose: Any) -> bool:
         return bool(np.any(np.abs(np.asarray(pose, dtype=float)) > 1.0))
     except (TypeError, ValueError):
         return False
-
-
-def _wrap(a: float) -> float:
-    return float((a + math.pi) % (2 * math.pi) - math.pi)
 
 
 def _clip(x: np.ndarray, box: spaces.Space[Any]) -> np.ndarray:

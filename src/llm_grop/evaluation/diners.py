@@ -18,6 +18,7 @@ from llm_grop.contract.models import ArrangementDoc, ObjectDoc, TableDoc
 from llm_grop.contract.serialize import table_of
 from llm_grop.errors import BadInput
 from llm_grop.geometry.places import outline, places
+from llm_grop.world.angles import wrap_angle
 
 
 def several_diners(doc: ArrangementDoc) -> bool:
@@ -63,15 +64,10 @@ def diner_docs(doc: ArrangementDoc, where: str = "arrangement"
             dx, dy = o.x - place.origin[0], o.y - place.origin[1]
             objects.append(ObjectDoc.model_validate({
                 **o.model_dump(exclude_unset=True), "x": c * dx + s * dy,
-                "y": -s * dx + c * dy, "yaw": _wrap(o.yaw - place.yaw)}))
+                "y": -s * dx + c * dy, "yaw": wrap_angle(o.yaw - place.yaw)}))
         local = affinity.rotate(affinity.translate(top, -place.origin[0], -place.origin[1]),
                                 -place.yaw, origin=(0.0, 0.0), use_radians=True)
         sub = ArrangementDoc(request="", table=TableDoc(size=place.box.size), objects=objects)
         out.append((sub, local))
     return out
 
-
-def _wrap(angle: float) -> float:
-    """``angle`` in radians wrapped to ``(-pi, pi]``."""
-    a = math.remainder(angle, 2 * math.pi)
-    return math.pi if math.isclose(a, -math.pi) else a

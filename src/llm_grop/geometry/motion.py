@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from llm_grop.world.angles import wrap_angle
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.robot import Robot
 
@@ -19,9 +20,9 @@ def turning_rad(start: Pose2D, goal: Pose2D, path: Sequence[tuple[float, float]]
         if math.dist(a, b) < 1e-9:
             continue
         h = math.atan2(b[1] - a[1], b[0] - a[0])
-        total += abs(wrap(h - heading))
+        total += abs(wrap_angle(h - heading))
         heading = h
-    return total + abs(wrap(goal.theta - heading))
+    return total + abs(wrap_angle(goal.theta - heading))
 
 
 def path_length_m(path: Sequence[tuple[float, float]]) -> float:
@@ -40,12 +41,12 @@ def arrival_error(here: Pose2D, goal: Pose2D) -> tuple[float, float]:
     """How far a base standing at ``here`` is from ``goal``: distance (metres) and absolute
     heading difference (radians), rounded to 0.1 mm and 0.1 mrad."""
     return (round(math.dist((here.x, here.y), (goal.x, goal.y)), 4),
-            round(abs(wrap(here.theta - goal.theta)), 4))
+            round(abs(wrap_angle(here.theta - goal.theta)), 4))
 
 
-def wrap(angle: float) -> float:
-    """``angle`` in radians wrapped to ``[-pi, pi)``."""
-    return (angle + math.pi) % (2 * math.pi) - math.pi
+#: The former name of :func:`~llm_grop.world.angles.wrap_angle` (which wraps into
+#: ``(-pi, pi]``; this module's own wrap gave ``-pi`` for the half turn).
+wrap = wrap_angle
 
 
 def path_prefix(path: Sequence[tuple[float, float]], distance_m: float

@@ -25,6 +25,7 @@ from shapely.geometry import Point, Polygon
 from shapely.geometry import box as rect
 
 from llm_grop.errors import BadInput
+from llm_grop.world.angles import wrap_angle
 from llm_grop.world.seat import Seat
 from llm_grop.world.table import Table
 
@@ -54,7 +55,7 @@ def default_seats(table: Table, n: int) -> tuple[Seat, ...]:
         out = []
         for k in range(n):
             a = -math.pi / 2 + 2 * math.pi * k / n
-            out.append(Seat(r * math.cos(a), r * math.sin(a), _wrap(a + math.pi)))
+            out.append(Seat(r * math.cos(a), r * math.sin(a), wrap_angle(a + math.pi)))
         return tuple(out)
     front = (n + 1) // 2
     back = n - front
@@ -179,10 +180,3 @@ def inside_region(x: ArrayLike, y: ArrayLike, hx: float, hy: float, circle: bool
         ok &= shapely.contains_xy(inner, x + sx * hx, y + sy * hy)
     return ok
 
-
-def _wrap(angle: float) -> float:
-    """``angle`` in radians wrapped to ``(-pi, pi]``."""
-    a = math.fmod(angle + math.pi, 2 * math.pi)
-    if a <= 0:
-        a += 2 * math.pi
-    return a - math.pi

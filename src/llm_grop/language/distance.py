@@ -7,7 +7,7 @@
   gives its midpoint.
 * Units: centimetres, millimetres, metres, inches ("in." or a final "in", never
   the word "in" inside a sentence), feet. Number words ("five", "twenty-two",
-  "one and a half", "half an inch") are understood.
+  "one and a half", "half an inch"; the table of ``request_words.yaml``) are understood.
 * Without any unit, the first number is read as centimetres.
 * A negative distance, one above :data:`MAX_GAP_CM`, or none at all gives ``None``
   (:func:`llm_grop.arrangement.distances.parse_distance_m` then falls back to a default).
@@ -15,16 +15,21 @@
   The text is NFKC-normalised first, so fullwidth ("１０ ｃｍ") and mathematical
   digits read as ASCII ones and thin or no-break spaces as spaces; only ASCII
   digits are then read (Arabic-Indic and other scripts' digits are not). The
-  Unicode minus "−", "‐", "‑", "‒" and the en and em dashes are hyphens, so "−5 cm"
-  is negative and "5–7 cm" a range. Superscripts, subscripts, circled digits and
-  other fractions ("²", "₂", "①", "⅓"), which NFKC would turn into digits, are
-  read as spaces: "5 cm²" is 5 cm, and "① Place it" holds no number.
+  Unicode minus "−", "‐", "‑", "‒" and the en and em dashes are hyphens (:data:`DASHES`,
+  the one table of them), so "−5 cm" is negative and "5–7 cm" a range. Superscripts,
+  subscripts, circled digits and other fractions ("²", "₂", "①", "⅓"), which NFKC would
+  turn into digits, are read as spaces: "5 cm²" is 5 cm, and "① Place it" holds no
+  number.
 """
 
 from __future__ import annotations
 
+import functools
 import re
 import unicodedata
+from collections.abc import Mapping
+
+from llm_grop.language.vocabulary import request_words
 
 #: Answers above this many centimetres are taken as unreadable.
 MAX_GAP_CM = 200.0
@@ -32,15 +37,6 @@ MAX_GAP_CM = 200.0
 #: Centimetres per unit, by the unit's first letters (see ``_unit_cm``).
 _UNIT_CM = {"cm": 1.0, "centi": 1.0, "mm": 0.1, "milli": 0.1, "m": 100.0, "met": 100.0,
             "in": 2.54, "″": 2.54, "ft": 30.48, "foot": 30.48, "feet": 30.48}
-_ONES = {
-    "zero": 0, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7,
-    "eight": 8, "nine": 9, "ten": 10, "eleven": 11, "twelve": 12, "thirteen": 13,
-    "fourteen": 14, "fifteen": 15, "sixteen": 16, "seventeen": 17, "eighteen": 18,
-    "nineteen": 19,
-}
-_DIGITS = {"one": 1, **_ONES}
-_TENS = {"twenty": 20, "thirty": 30, "forty": 40, "fifty": 50, "sixty": 60, "seventy": 70,
-         "eighty": 80, "ninety": 90}
 
 # ASCII digits only ([0-9], not \d): other scripts' digits are not read (module docstring).
 _NUM = r"(?:(?:[0-9]{1,3}(?:,[0-9]{3})+|[0-9]+)(?:\.[0-9]+)?|\.[0-9]+)(?:e[+-]?[0-9]+)?"
@@ -51,8 +47,11 @@ _QUANTITY = re.compile(
     r"(?![a-z])")
 _BARE = re.compile(rf"(?<![\w.])({_NUM})(?:\s*(?:-|to|or)\s*({_NUM}))?(?![\w])")
 _LIST_NUMBER = re.compile(r"^\s*(?:step\s*)?[0-9]+\s*[.):]\s+", re.MULTILINE)
-#: Characters read as a hyphen (so as a minus sign or a range's dash).
-_DASHES = str.maketrans(dict.fromkeys("\u2010\u2011\u2012\u2013\u2014\u2212", "-"))
+#: The characters read as a hyphen (so as a minus sign or a range's dash) wherever
+#: llm-grop reads text: the hyphen, the Unicode hyphen, non-breaking hyphen and figure
+#: dash, the en and em dashes, and the minus sign.
+DASHES = "-\u2010\u2011\u2012\u2013\u2014\u2212"
+_AS_HYPHEN = str.maketrans(dict.fromkeys(DASHES[1:], "-"))
 #: Fractions read as decimals (before NFKC, which would make "½" the digits "1⁄2").
 _FRACTIONS = {"½": ".5", "¼": ".25", "¾": ".75"}
 
@@ -76,20 +75,39 @@ def _unit_cm(unit: str) -> float:
     raise ValueError(f"unknown unit {unit!r}")
 
 
+@functools.cache
+def _number_words() -> tuple[Mapping[str, int], Mapping[str, int], Mapping[str, int]]:
+    """The number words of ``request_words.yaml`` (the one table of them) as this module
+    reads them: those below twenty, the same without "one" (a pronoun as often as a
+    number, so read only before a unit), and the tens, which one below twenty may follow
+    ("twenty-two")."""
+    numbers = request_words().numbers
+    below_twenty = {w: n for w, n in numbers.items() if n < 20}
+    ones = {w: n for w, n in below_twenty.items() if w != "one"}
+    tens = {w: n for w, n in numbers.items() if 20 <= n < 100 and n % 10 == 0}
+    return below_twenty, ones, tens
+
+
 def _words_to_digits(text: str) -> str:
     """Number words as digits: "twenty-two cm" -> "22 cm", "half an inch" -> "0.5 inch"."""
+    below_twenty, ones, tens = _number_words()
     unit = rf"(?=\s*(?:{_UNIT})(?![a-z]))"
-    tens, ones = "|".join(_TENS), "|".join(_DIGITS)
-    text = re.sub(rf"\b({tens})(?:[\s-]+({ones}))?\b",
-                  lambda m: str(_TENS[m.group(1)] + (_DIGITS[m.group(2)] if m.group(2) else 0)),
+    text = re.sub(rf"\b({'|'.join(tens)})(?:[\s-]+({'|'.join(below_twenty)}))?\b",
+                  lambda m: str(tens[m.group(1)] + (below_twenty[m.group(2)] if m.group(2)
+                                                    else 0)),
                   text)
-    text = re.sub(rf"\b({'|'.join(_ONES)})\b", lambda m: str(_ONES[m.group(1)]), text)
+    text = re.sub(rf"\b({'|'.join(ones)})\b", lambda m: str(ones[m.group(1)]), text)
     text = re.sub(r"\b(\d+|one|an?)\s+and\s+(?:a|one)\s+half\b",
-                  lambda m: f"{_DIGITS.get(m.group(1), 1) + 0.5:g}" if not m.group(1)[0].isdigit()
-                  else f"{int(m.group(1)) + 0.5:g}", text)
+                  lambda m: f"{below_twenty.get(m.group(1), 1) + 0.5:g}"
+                  if not m.group(1)[0].isdigit() else f"{int(m.group(1)) + 0.5:g}", text)
     text = re.sub(rf"\bhalf\s+(?:a|an)\b{unit}", "0.5", text)
     text = re.sub(rf"\b(?:a|an)\s+half\b{unit}", "0.5", text)
     return re.sub(rf"\b(?:a|an|one)\b{unit}", "1", text)
+
+
+def plain_dashes(text: str) -> str:
+    """``text`` with each of :data:`DASHES` an ASCII hyphen."""
+    return text.translate(_AS_HYPHEN)
 
 
 def _in_range(cm: float) -> float | None:
@@ -111,7 +129,7 @@ def _normalized(text: str) -> str:
         text = "".join(" " if ch.isnumeric() and not ch.isdecimal() else ch for ch in text)
         # NFKC makes the double prime (inches) two primes.
         text = unicodedata.normalize("NFKC", text).replace("′′", "″")
-    return text.lower().translate(_DASHES)
+    return plain_dashes(text.lower())
 
 
 def parse_distance_cm(text: str) -> float | None:
@@ -137,4 +155,4 @@ def parse_distance_cm(text: str) -> float | None:
 
 
 
-__all__ = ["MAX_GAP_CM", "parse_distance_cm", "unit_cm"]
+__all__ = ["DASHES", "MAX_GAP_CM", "parse_distance_cm", "plain_dashes", "unit_cm"]

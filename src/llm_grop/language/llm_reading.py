@@ -21,7 +21,7 @@ from importlib import resources
 from typing import Any
 
 from llm_grop.errors import BadInput, UnknownObject
-from llm_grop.language.distance import parse_distance_cm
+from llm_grop.language.distance import DASHES, parse_distance_cm
 from llm_grop.language.reading import (
     Reading,
     ReadObject,
@@ -215,10 +215,10 @@ def _distance_cm(value: object, where: str) -> float | None:
         cm = float(value)
     else:
         text = str(value).strip()[:40]
-        cm = parse_distance_cm(text.lstrip("-−").strip())
+        cm = parse_distance_cm(text.lstrip(DASHES).strip())
         if cm is None:
             raise BadInput(f"{where}: distance {text!r} is no distance")
-        if text[:1] in "-−":
+        if text[:1] in DASHES:
             cm = -cm
     if cm != cm or cm in (float("inf"), float("-inf")):
         raise BadInput(f"{where}: distance {value!r} is no number")

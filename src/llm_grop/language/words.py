@@ -10,7 +10,7 @@ import unicodedata
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from llm_grop.language.distance import unit_cm
+from llm_grop.language.distance import plain_dashes, unit_cm
 from llm_grop.language.vocabulary import its_segments, request_words
 
 #: A word, or a number with its decimals: "2.5 cm" is one number and a unit.
@@ -37,8 +37,7 @@ def normalized(text: str) -> str:
         return text
     out = [c if unicodedata.category(c) == "No" else unicodedata.normalize("NFKC", c)
            for c in text]
-    return "".join(out).replace("\u2019", "'").replace("\u2018", "'").translate(
-        str.maketrans(dict.fromkeys("\u2010\u2011\u2012\u2013\u2014\u2212", "-")))
+    return plain_dashes("".join(out).replace("\u2019", "'").replace("\u2018", "'"))
 
 
 def is_number(word: str) -> bool:

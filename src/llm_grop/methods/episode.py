@@ -40,31 +40,17 @@ class PlannedEpisode:
     feasibility: str = "default"
 
 
-def run_episode(method: Method, inp: EpisodeInput, scene: Scene, *, task: int | None,
-                simulator: Simulator, model: FeasibilityModel | str = "default",
-                planner: GropOptions | None = None,
-                policy: ExecutionPolicy | None = None) -> RunResult:
-    """Arrange, plan and execute in ``scene`` (its chairs are sensed at planning time).
-
-    ``model`` is the planner's belief of how often actions succeed, a model or the name of
-    a profile (:func:`~llm_grop.planning.feasibility.feasibility_profile`); ``simulator`` decides
-    what really happens, and the executive runs the plan on it under ``policy`` (default:
-    the authors' attempt counts, the method's for manipulation).
-
-    Planning time counts the arrangement's computation without LLM calls, GROP and the
-    OMPL paths. Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
-    """
-    planned = plan_episode(method, inp, scene, model=model, planner=planner)
-    return execute_episode(planned, inp, task=task, simulator=simulator, planner=planner,
-                           attempts=method.manip_attempts,
-                           method=method.name, policy=policy)
-
-
 def plan_episode(method: Method, inp: EpisodeInput, scene: Scene, *,
                  model: FeasibilityModel | str = "default",
                  planner: GropOptions | None = None) -> PlannedEpisode:
-    """The first half of :func:`run_episode`: ``method``'s arrangement and the task-motion
-    plan for it in ``scene``, not executed."""
+    """The first half of an episode: ``method``'s arrangement and the task-motion plan for
+    it in ``scene`` (its chairs are sensed at planning time), not executed.
+
+    ``model`` is the planner's belief of how often actions succeed, a model or the name of
+    a profile (:func:`~llm_grop.planning.feasibility.feasibility_profile`). Planning time
+    counts the arrangement's computation without LLM calls, GROP and the OMPL paths.
+    Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
+    """
     proposal = method.arrangement.propose(inp)
     _say(inp, f"planning for {len(proposal.configurations)} configuration(s)")
     t0 = time.perf_counter()
@@ -89,10 +75,10 @@ def execute_episode(planned: PlannedEpisode, inp: EpisodeInput, *, task: int | N
                     simulator: Simulator, method: str, attempts: int,
                     planner: GropOptions | None = None,
                     policy: ExecutionPolicy | None = None) -> RunResult:
-    """The second half of :func:`run_episode`: ``planned`` executed by the executive on
-    ``simulator``, with ``attempts`` per pick and place unless ``policy`` sets them; the
-    simulator's randomness comes from the seed's ``simulator`` stream, so a plan executed
-    here gives the same run as :func:`run_episode` with the same seed."""
+    """The second half of an episode: ``planned`` (:func:`plan_episode`) executed by the
+    executive on ``simulator``, which decides what really happens, with ``attempts`` per
+    pick and place unless ``policy`` sets them; the simulator's randomness comes from the
+    seed's ``simulator`` stream, so the same seed gives the same run."""
     plan, scene = planned.plan, planned.scene
     _say(inp, f"executing the plan (configuration {plan.configuration_index}, from 0; "
               f"expected utility {plan.utility:.1f} s) with {simulator.name}")

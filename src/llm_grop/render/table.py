@@ -48,12 +48,6 @@ _AXES_RECT = (0.09, 0.065, 0.87, 0.78)
 _MARGIN_M = 0.05
 _DINER_SPACE_M = 0.16
 _TITLE_WIDTH_CHARS = 80
-_SHORT_RELATION = {
-    "to the left of": "left of", "to the right of": "right of", "above": "above",
-    "below": "below", "above and to the left of": "above-left of",
-    "above and to the right of": "above-right of", "below and to the left of": "below-left of",
-    "below and to the right of": "below-right of",
-}
 
 
 def kind_colors(placements: Sequence[Placement]) -> dict[str, str]:
@@ -243,13 +237,13 @@ def _draw_relations(ax: Axes, arrangement: Arrangement, compact: bool = False) -
         if rel.relation in STACKING or subject is None:
             continue
         if rel.relation == CENTER:
-            end, label, reference = (0.0, 0.0), "center", None
+            end, reference = (0.0, 0.0), None
         elif rel.reference in by_name:
             reference = by_name[rel.reference]
             end = (reference.x, reference.y)
-            label = _SHORT_RELATION.get(rel.relation, rel.relation)
         else:
             continue
+        label = relation_label(rel.relation)
         length = math.dist((subject.x, subject.y), end)
         if length < 1e-6:
             continue
@@ -268,6 +262,13 @@ def _draw_relations(ax: Axes, arrangement: Arrangement, compact: bool = False) -
                 ha="center", va="center", zorder=21,
                 bbox={"boxstyle": "round,pad=0.1", "facecolor": "#ffffe0", "alpha": 0.85,
                       "edgecolor": "none"})
+
+
+def relation_label(name: str) -> str:
+    """The label of relation ``name`` (a name of ``world/relations.yaml``) on a picture: the
+    name without "to the", its two directions joined by a hyphen ("to the left of": "left
+    of", "above and to the left of": "above-left of", "above": "above")."""
+    return name.replace(" and to the ", "-").removeprefix("to the ")
 
 
 def _small(size: float, compact: bool) -> float:

@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 from llm_grop.errors import BadInput
+from llm_grop.world.angles import wrap_angle
 from llm_grop.world.geometry2d import Box, Disc, Pose2D
 from llm_grop.world.robot import Robot
 from llm_grop.world.seat import Seat
@@ -178,18 +179,11 @@ class Scene:
         """A table-frame pose of the target table in the room frame."""
         box = self.target_table.box
         rx, ry = box.to_room(x, y)
-        return Pose2D(rx, ry, _wrap(yaw + box.yaw))
+        return Pose2D(rx, ry, wrap_angle(yaw + box.yaw))
 
     def room_to_table(self, x: float, y: float, theta: float = 0.0) -> tuple[float, float, float]:
         """A room-frame pose in the target table's frame, as ``(x, y, yaw)``."""
         box = self.target_table.box
         u, v = box.to_local(x, y)
-        return (u, v, _wrap(theta - box.yaw))
+        return (u, v, wrap_angle(theta - box.yaw))
 
-
-def _wrap(angle: float) -> float:
-    """``angle`` in radians wrapped to ``(-pi, pi]``."""
-    a = math.fmod(angle + math.pi, 2 * math.pi)
-    if a <= 0:
-        a += 2 * math.pi
-    return a - math.pi

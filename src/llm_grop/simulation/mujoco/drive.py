@@ -35,8 +35,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from llm_grop.geometry.motion import wrap
 from llm_grop.simulation.mujoco.options import BaseOptions
+from llm_grop.world.angles import wrap_angle
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import Point, Reason
 
@@ -126,7 +126,7 @@ def follow(w: World, path: Sequence[Point], goal: Pose2D, o: BaseOptions,
             ahead = (goal.x - p.x) * math.cos(p.theta) + (goal.y - p.y) * math.sin(p.theta)
             v_cmd, w_cmd = math.sqrt(2 * APPROACH * o.accel_mps2 * max(ahead, 0.0)), 0.0
         elif arrived:
-            e = wrap(goal.theta - p.theta)
+            e = wrap_angle(goal.theta - p.theta)
             if abs(e) <= o.yaw_goal_tolerance_rad:
                 v_cmd, w_cmd = 0.0, 0.0
                 if abs(limits.w) < STILL_RADPS:
@@ -172,7 +172,8 @@ def follow(w: World, path: Sequence[Point], goal: Pose2D, o: BaseOptions,
                          _points(np.vstack([seen, touched])))
         if math.dist(passed[-1], (q.x, q.y)) > 0.05:
             passed.append((q.x, q.y))
-        if math.dist(mark, (q.x, q.y)) > PROGRESS_M or abs(wrap(q.theta - mark_yaw)) > PROGRESS_RAD:
+        if (math.dist(mark, (q.x, q.y)) > PROGRESS_M
+                or abs(wrap_angle(q.theta - mark_yaw)) > PROGRESS_RAD):
             mark, mark_yaw, mark_t = (q.x, q.y), q.theta, w.d.time
         stalled = w.d.time - mark_t > o.progress_timeout_s
         if stalled or w.d.time - t0 > time_limit_s:
@@ -214,7 +215,7 @@ def _stop(w: World, limits: _Limits, limit_s: float = 1.0) -> None:
 
 def _behind(p: Pose2D) -> Pose2D:
     """``p`` facing the other way."""
-    return Pose2D(p.x, p.y, wrap(p.theta + math.pi))
+    return Pose2D(p.x, p.y, wrap_angle(p.theta + math.pi))
 
 
 def _ended(w: World, passed: list[Point]) -> tuple[Point, ...]:
@@ -265,7 +266,7 @@ def _pursue(route: np.ndarray, k: int, p: Pose2D, limits: _Limits) -> tuple[floa
     carrot = _along(route, k, t + o.lookahead_m, stop)
     dx, dy = carrot - here
     heading = math.atan2(dy, dx) if math.hypot(dx, dy) > 1e-6 else p.theta
-    alpha = wrap(heading - p.theta)
+    alpha = wrap_angle(heading - p.theta)
     if abs(alpha) > o.rotate_to_heading_rad:
         return 0.0, _turn_rate(alpha, limits)
     v = min(limits.v_max, math.sqrt(2 * APPROACH * o.accel_mps2 * remaining) + STILL_MPS)
@@ -280,7 +281,7 @@ def _pursue(route: np.ndarray, k: int, p: Pose2D, limits: _Limits) -> tuple[floa
 def _bend(route: np.ndarray, i: int) -> float:
     """How far the route turns at vertex ``i``, radians."""
     u, v = route[i] - route[i - 1], route[i + 1] - route[i]
-    return abs(wrap(math.atan2(v[1], v[0]) - math.atan2(u[1], u[0])))
+    return abs(wrap_angle(math.atan2(v[1], v[0]) - math.atan2(u[1], u[0])))
 
 
 def _along(route: np.ndarray, k: int, s: float, stop: int) -> np.ndarray:

@@ -18,11 +18,11 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from llm_grop.geometry.motion import wrap
 from llm_grop.simulation.mujoco.arm import ARM_JOINTS, ArmIK
 from llm_grop.simulation.mujoco.lidar import Lidar
 from llm_grop.simulation.mujoco.options import Grasp, LidarOptions
 from llm_grop.simulation.mujoco.world_model import WorldModel
+from llm_grop.world.angles import wrap_angle
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.scene import Scene
 
@@ -49,8 +49,6 @@ FRICTION_IMPRATIO = 10.0
 FRICTION_SQUEEZE_N = 20.0
 #: ... and a finger's reflected inertia, kg (the transmission's armature; 0.01 otherwise).
 FRICTION_FINGER_ARMATURE = 0.2
-#: A body is "on" a surface when its bottom is within this height of the surface, metres.
-REST_TOL_M = 0.015
 
 
 @dataclass(frozen=True)
@@ -214,7 +212,7 @@ class World:
     def base_pose(self) -> Pose2D:
         """The base's pose in the room frame."""
         x, y, th = (float(v) for v in self.d.qpos[self.base_qpos])
-        return Pose2D(x, y, wrap(th))
+        return Pose2D(x, y, wrap_angle(th))
 
     def object_pose(self, name: str) -> ObjectPose:
         """Where tableware ``name`` is."""
