@@ -156,7 +156,8 @@ def faulty_site(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
         [llm_grop.simulators]
         broken-sim = llm_grop_faulty_absent:SIMULATOR
-        failing-sim = llm_grop_faulty:failing_simulator
+        failing-sim = llm_grop_faulty:FailingSimulator
+        function-sim = llm_grop_faulty:simulator_function
 
         [llm_grop.llm_backends]
         not-an-llm = llm_grop_faulty:NotLLM
@@ -170,8 +171,18 @@ def faulty_site(tmp_path_factory: pytest.TempPathFactory) -> Path:
                                       uses_llm=False, standing="uniform", best_of_all=False)
 
 
-            def failing_simulator():
-                raise RuntimeError("no physics engine here")
+            from llm_grop.simulation.kinematic2d import Kinematic2D
+
+
+            class FailingSimulator(Kinematic2D):
+                name = "failing-sim"
+
+                def __init__(self, options=None):
+                    raise RuntimeError("no physics engine here")
+
+
+            def simulator_function():
+                return Kinematic2D()
 
 
             class NotLLM:
@@ -346,9 +357,14 @@ def test_picklable_run_time_method_is_handed_over(forget_runtime: list[str]) -> 
                  ["--simulator: plugin llm-grop-faulty 0.1: simulator 'failing-sim' failed to "
                   "start: RuntimeError: no physics engine here"],
                  id="factory-raises"),
+    pytest.param(["--methods", "grop", "--simulator", "function-sim"],
+                 ["--simulator: plugin llm-grop-faulty 0.1: simulator 'function-sim' is not "
+                  "a subclass of llm_grop.simulation.base.Simulator"],
+                 id="simulator-not-declared"),
     pytest.param(["--methods", "llm-grop", "--llm", "not-an-llm"],
                  ["--llm: plugin llm-grop-faulty 0.1: backend 'not-an-llm' made an object "
-                  "without backend, model, complete"],
+                  "that does not follow the LLM protocol (it needs backend, model, "
+                  "supports_schema, cache_identity, complete, close)"],
                  id="backend-makes-no-llm"),
 ])
 def test_faulty_plugin_gives_one_line_error(args: list[str], expected: list[str],

@@ -196,9 +196,9 @@ class Registry(Generic[T]):
             raise BadInput(f"{origin}: {self.kind} {key!r} failed to start: "
                            f"{type(exc).__name__}: {exc}", param=self.param) from None
         if self.protocol is not None and not isinstance(made, self.protocol):
-            raise BadInput(f"{origin}: {self.kind} {key!r} made an object that is not "
-                           f"a {self.protocol.__name__} (it needs {', '.join(self.product)})",
-                           param=self.param)
+            raise BadInput(f"{origin}: {self.kind} {key!r} made an object that does not "
+                           f"follow the {self.protocol.__name__} protocol (it needs "
+                           f"{', '.join(self.product)})", param=self.param)
         return made
 
     def _validate(self, name: str, obj: Any, origin: str) -> None:

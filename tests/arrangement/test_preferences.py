@@ -71,7 +71,7 @@ def test_contradicting_preferences_are_bad_input(chat_server) -> None:
 
 def test_unreadable_preference_is_bad_input(chat_server) -> None:
     chat_server.reply = scripted([TASK1_GOOD])
-    with pytest.raises(BadInput, match="^options.preferences: 'the mug near the plate': "
+    with pytest.raises(BadInput, match="^preferences: 'the mug near the plate': "
                                        "cannot read it"):
         _arrange(chat_server, ArrangeOptions(preferences=("the mug near the plate",)))
 

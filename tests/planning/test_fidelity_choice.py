@@ -58,5 +58,5 @@ def test_the_choice_follows_the_documented_weight(weight: float) -> None:
 def test_the_weight_must_be_finite_and_not_negative() -> None:
     from llm_grop.errors import BadInput
     for bad in (-1.0, float("inf"), float("nan")):
-        with pytest.raises(BadInput, match="^planner.fidelity_w_s_per_cm: must be"):
+        with pytest.raises(BadInput, match="^fidelity_weight: must be"):
             GropOptions(fidelity_w_s_per_cm=bad)
