@@ -14,7 +14,7 @@ from service_support import RECORDING
     (["--host", "0.0.0.0"], "--host 0.0.0.0: not a loopback address; serving other hosts "
                             "needs --token"),
     (["--host", "192.168.1.5", "--token", "short"], "--token: 5 characters; use at least 16"),
-    (["--llm", "replay"], "--llm replay needs --replay FILE"),
+    (["--llm", "replay"], "--llm replay: needs --replay FILE"),
     (["--llm", "replay", "--replay", "missing.jsonl"], "--replay missing.jsonl: no such file"),
     (["--llm", "nope"], "--llm: unknown"),
 ])

@@ -241,7 +241,8 @@ def test_missing_offscreen_rendering_names_the_apt_package(tmp_path: Path) -> No
 
 def test_pictures_need_a_3d_simulator(capsys) -> None:
     assert main(["run", "a dinner fork", "--method", "grop", "--table-image", "x.png"]) == 2
-    assert "needs --simulator mujoco" in one_line_error(capsys)
+    assert "needs a simulator that renders, such as --simulator mujoco" in \
+        one_line_error(capsys)
 
 
 def test_video_must_be_mp4(capsys, tmp_path: Path) -> None:
