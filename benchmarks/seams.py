@@ -20,17 +20,18 @@ from __future__ import annotations
 import argparse
 import ast
 import re
-from collections import Counter
 from pathlib import Path
 
 #: Each default of a run, and the patterns of Python that write its value.
 DEFAULTS: dict[str, list[str]] = {
     "M = 25": [r"\bm\s*(?::\s*int)?\s*=\s*25\b", r"default=25\b", r"Field\(25\b",
-               r"\]\s*=\s*25\b", r"\(\s*25\s*,\s*description"],
-    "weight 40": [r"\bw\s*(?::\s*float)?\s*=\s*40\.0\b", r"default=40\.0", r"\b40\.0,\s*\"GROP"],
+               r"\]\s*=\s*25\b", r"^\s*25,\s*\"Configurations"],
+    "weight 40": [r"\bw\s*(?::\s*float)?\s*=\s*40\.0\b", r"default=40\.0",
+                  r"^\s*40\.0,\s*\"GROP"],
     "answer cap 1 MiB": [r"1024\s*\*\s*1024", r"1_048_576", r"2\s*\*\*\s*20"],
-    "simulator kinematic2d": [r"[=(]\s*\"kinematic2d\"\s*[,)]", r"=\s*\"kinematic2d\"\s*$",
-                              r"Field\(\"kinematic2d\""],
+    "simulator kinematic2d": [r"(?<!name )[=(]\s*\"kinematic2d\"\s*[,)]",
+                              r"(?<!name )=\s*\"kinematic2d\"\s*$",
+                              r"Field\(\"kinematic2d\"", r"^\s*\"kinematic2d\",\s*\"The"],
     "LLM deadline 60 s": [r"timeout_s\s*(?::\s*float)?\s*=\s*60\.0", r"default=60\.0",
                           r"^\s*60\.0,\s*\"Seconds one LLM"],
     "nav attempts 3": [r"NAV_ATTEMPTS\s*=\s*3\b", r"nav_attempts.*default=3\b",
@@ -38,15 +39,15 @@ DEFAULTS: dict[str, list[str]] = {
 }
 
 
-def default_places(files: list[Path]) -> dict[str, int]:
-    """How many lines write each default."""
-    counts: Counter[str] = Counter()
+def default_places(files: list[Path], root: Path) -> dict[str, list[str]]:
+    """The lines (``file:line``) that write each default."""
+    found: dict[str, list[str]] = {name: [] for name in DEFAULTS}
     for f in files:
-        for line in f.read_text(encoding="utf-8").splitlines():
+        for k, line in enumerate(f.read_text(encoding="utf-8").splitlines(), 1):
             for name, patterns in DEFAULTS.items():
                 if any(re.search(p, line) for p in patterns):
-                    counts[name] += 1
-    return {name: counts[name] for name in DEFAULTS}
+                    found[name].append(f"{f.relative_to(root)}:{k}")
+    return found
 
 
 def public_parameters(files: list[Path], root: Path) -> list[tuple[int, str]]:
@@ -94,8 +95,8 @@ def main() -> None:
     files = sorted(p for p in root.rglob("*.py"))
     print(f"== {root}")
     print("places each default is written:")
-    for name, n in default_places(files).items():
-        print(f"  {name:24s} {n}")
+    for name, where in default_places(files, root).items():
+        print(f"  {name:24s} {len(where)}  {' '.join(where)}")
     params = public_parameters(files, root)
     print(f"largest parameter count of a public function: {params[0][0]} ({params[0][1]})")
     for n, name in params[1:5]:

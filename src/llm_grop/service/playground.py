@@ -32,6 +32,7 @@ from llm_grop.service.models import (
     one_line,
 )
 from llm_grop.service.service import Service, StillRunning
+from llm_grop.settings import DEFAULTS
 from llm_grop.web import same_origin
 
 HISTORY_COOKIE = "llm_grop_history"
@@ -105,7 +106,7 @@ def add_playground(app: FastAPI, service: Service) -> None:
                    depth_cm: Annotated[str, Form(max_length=16)] = "60",
                    diners: Annotated[str, Form(max_length=4)] = "1",
                    seed: Annotated[str, Form(max_length=12)] = "0",
-                   simulator: Annotated[str, Form(max_length=32)] = "kinematic2d",
+                   simulator: Annotated[str, Form(max_length=32)] = DEFAULTS.simulator,
                    preferences: Annotated[str, Form(max_length=4000)] = "") -> Response:
         _check_origin(request)
         fields = {"request": request_text, "llm": llm, "shape": shape, "width_cm": width_cm,
@@ -180,8 +181,8 @@ def _body(action: str, fields: dict[str, str]) -> tuple[str, ArrangeBody | PlanB
 def _form(values: Any) -> dict[str, str]:
     """The form's fields, as given or by default."""
     defaults = {"request": "", "llm": "", "shape": "rectangle", "width_cm": "90",
-                "depth_cm": "60", "diners": "1", "seed": "0", "simulator": "kinematic2d",
-                "preferences": ""}
+                "depth_cm": "60", "diners": "1", "seed": str(DEFAULTS.seed),
+                "simulator": DEFAULTS.simulator, "preferences": ""}
     return {k: str(values.get(k, v) or v) if k != "request" else str(values.get(k, v))
             for k, v in defaults.items()}
 
@@ -194,7 +195,7 @@ def _fields(job: Job) -> dict[str, str]:
     return {"request": b.get("request") or "", "llm": b.get("llm") or "",
             "shape": table.get("shape", "rectangle"), "width_cm": f"{size[0] * 100:g}",
             "depth_cm": f"{size[1] * 100:g}", "diners": str(b.get("diners") or 1),
-            "seed": str(b.get("seed", 0)), "simulator": b.get("simulator", "kinematic2d"),
+            "seed": str(b.get("seed", 0)), "simulator": b.get("simulator", DEFAULTS.simulator),
             "preferences": "\n".join(b.get("preferences") or [])}
 
 
