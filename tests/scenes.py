@@ -3,7 +3,7 @@ a constant true success model for simulators."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.geometry2d import Box, Pose2D
@@ -25,6 +25,14 @@ def two_table_room(chairs: tuple[Chair, ...] = (), sources: tuple[ObjectSource, 
                             ObjectSource("dinner knife", "counter", 0.45, 1.6),
                             ObjectSource("mug", "counter", 0.45, 2.5)),
         chairs=chairs)
+
+
+def doorway_room(gap_m: float = 0.74) -> Scene:
+    """:func:`two_table_room` split by a wall at x = 1.6 m with a doorway ``gap_m`` wide
+    at y = 2 m: the robot starts west of it and the dining table is east."""
+    lo = (4.0 - gap_m) / 2
+    return replace(two_table_room(), walls=(Box(1.6, lo / 2, 0.1, lo),
+                                            Box(1.6, 4.0 - lo / 2, 0.1, lo)))
 
 
 def placement(name: str, x: float, y: float, shape: str = "circle",

@@ -13,7 +13,7 @@ from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import path_length_m as path_length
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY, ParametricFeasibility
-from llm_grop.planning.navigation import NavGraph, Navigator, cost_field
+from llm_grop.planning.navigation import PATH_MARGIN_M, NavGraph, Navigator
 from llm_grop.planning.occupancy import build_grid
 from llm_grop.planning.standing import (
     blocked_reason,
@@ -23,8 +23,8 @@ from llm_grop.planning.standing import (
 )
 from llm_grop.world.geometry2d import Box
 from llm_grop.world.robot import Robot
-from llm_grop.world.scene import Chair, ObjectSource
-from scenes import two_table_room
+from llm_grop.world.scene import Chair, ObjectSource, Scene
+from scenes import doorway_room, two_table_room
 
 
 def test_clearance_matches_shapely() -> None:
@@ -50,9 +50,9 @@ def test_chairs_are_left_out_of_the_prebuilt_map() -> None:
     assert Obstacles(scene, include_chairs=False).clearance(pt)[0] > 0.2
 
 
-def test_cost_field_is_close_to_euclidean_in_the_open() -> None:
+def test_cost_fields_are_close_to_euclidean_in_the_open() -> None:
     scene = two_table_room()
-    field = cost_field(build_grid(scene), (5.0, 0.6), 0.3)
+    field = NavGraph(build_grid(scene), 0.3).fields([(5.0, 0.6)])[0]
     pts = np.array([[5.0, 3.4], [1.0, 0.6], [5.6, 3.5]])
     straight = np.hypot(*(pts - [5.0, 0.6]).T)
     got = field.cost_at(pts)
@@ -60,9 +60,9 @@ def test_cost_field_is_close_to_euclidean_in_the_open() -> None:
     assert np.all(got <= straight * 1.04 + 0.05)
 
 
-def test_cost_field_goes_round_the_table() -> None:
+def test_cost_fields_go_round_the_table() -> None:
     scene = two_table_room()
-    field = cost_field(build_grid(scene), (3.0, 1.2), 0.3)
+    field = NavGraph(build_grid(scene), 0.3).fields([(3.0, 1.2)])[0]
     # Straight across the table is 1.6 m; the base has to go round it.
     assert field.cost_at(np.array([[3.0, 2.8]]))[0] > 2.2
 
@@ -86,8 +86,33 @@ def test_navigator_paths_are_free_deterministic_and_short() -> None:
     assert a[0] == start and a[-1] == goal
     for p, q in zip(a, a[1:], strict=False):
         assert nav.segment_free(p, q)
-    field = cost_field(build_grid(scene), start, 0.3)
+    field = NavGraph(build_grid(scene), 0.3).fields([start])[0]
     assert path_length(a) <= field.cost_at(np.array([goal]))[0] * 1.15
+
+
+def test_navigator_gives_up_after_its_iterations_not_its_clock() -> None:
+    scene = doorway_room(0.74)
+    start, goal = (1.0, 0.6), (5.0, 3.2)
+    # With this seed, a path that keeps the 6 cm margin through the doorway takes RRTConnect
+    # about 8,000 iterations; with fewer it gives up and plans without the margin.
+    kept = Navigator(scene, 0.3).plan(start, goal, seed=8)
+    hurried = Navigator(scene, 0.3, iterations=2_000).plan(start, goal, seed=8)
+    assert kept is not None and hurried is not None
+    assert _keeps(scene, kept, PATH_MARGIN_M) and not _keeps(scene, hurried, PATH_MARGIN_M)
+    assert _keeps(scene, hurried, 0.0)
+    # However long it may run, a search that ends on its iterations finds the same path.
+    assert Navigator(scene, 0.3, time_limit_s=1e6).plan(start, goal, seed=8) == kept
+
+
+def _keeps(scene: Scene, path: tuple[tuple[float, float], ...], margin_m: float) -> bool:
+    """Whether ``path`` keeps the 0.3 m base's radius plus ``margin_m`` (tapered at its
+    ends) all along."""
+    nav = Navigator(scene, 0.3)
+    pts = np.concatenate([np.linspace(p, q, 50) for p, q in zip(path, path[1:],
+                                                                 strict=False)])
+    ends = np.array([path[0], path[-1]])
+    return bool((nav.obstacles.clearance(pts)
+                 >= nav.required_m(pts, ends, margin_m) - 1e-9).all())
 
 
 def test_navigator_refuses_goals_in_collision() -> None:

@@ -5,6 +5,11 @@ path lengths from cost-to-go fields: one Dijkstra search per pickup over the gri
 cells, 16-connected so grid distances stay within about 3 % of Euclidean ones. Only the
 chosen plan's legs are planned with a sampling planner (OMPL's RRTConnect in R², then
 shortcut), and the simulator replans with it after a failure.
+
+A path depends on its seed and obstacles alone, never on the clock: RRTConnect stops
+when it has a path or after :data:`PATH_ITERATIONS` iterations, and its time limit is a
+safety net far above what those iterations take, so a slow or busy machine finds the
+same paths (and gives up on the same legs) as a fast one.
 """
 
 from __future__ import annotations
@@ -32,6 +37,15 @@ SENSED_CELL_M = 0.04
 #: (a costmap's inflation), tapering to none at their two ends, metres; where no such path
 #: exists, they keep the radius alone.
 PATH_MARGIN_M = 0.06
+#: RRTConnect's iterations (evaluations of its termination condition) before it gives up
+#: on a path. The paper's tasks need at most about 150 (tasks 1-8, 20 trials each); a
+#: path for the 0.6 m base through a 0.74 m doorway that keeps PATH_MARGIN_M up to about
+#: 8,000. 20,000 fruitless iterations take about 0.1 s of CPU.
+PATH_ITERATIONS = 20_000
+#: Seconds after which RRTConnect stops even before :data:`PATH_ITERATIONS`: a safety net
+#: against a runaway search only, far above what the iterations take even on a machine
+#: a hundred times slower, so that no run's result depends on it.
+PATH_TIME_LIMIT_S = 60.0
 
 #: Grid moves (row, column) of the 16-connected neighbourhood, one of each opposite pair.
 _MOVES = ((0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2))
@@ -132,27 +146,26 @@ def _swept(di: int, dj: int) -> tuple[tuple[int, int], ...]:
     return ((di // 2, 0), (di // 2, dj))
 
 
-def cost_field(grid: OccupancyGrid, source_xy: Point, radius_m: float) -> CostField:
-    """The cost-to-go field from ``source_xy`` for a round base of ``radius_m`` metres."""
-    return NavGraph(grid, radius_m).fields([source_xy])[0]
-
-
 class Navigator:
     """Collision-free paths for a round base, with OMPL's RRTConnect in R².
 
     Attributes:
         obstacles: what the paths avoid (with the sensed chairs when ``include_chairs``).
         radius_m: the base's radius, metres.
-        time_limit_s: OMPL's time limit per path, seconds.
+        time_limit_s: OMPL's safety-net time limit per path, seconds (see
+            :data:`PATH_TIME_LIMIT_S`); a path ends on ``iterations``, not on it.
+        iterations: RRTConnect's iterations per path before it gives up.
     """
 
     def __init__(self, scene: Scene, robot_radius_m: float, *, include_chairs: bool = True,
-                 time_limit_s: float = 0.5, sensed: tuple[Disc, ...] = ()) -> None:
+                 time_limit_s: float = PATH_TIME_LIMIT_S, sensed: tuple[Disc, ...] = (),
+                 iterations: int = PATH_ITERATIONS) -> None:
         self.scene = scene
         self.include_chairs = include_chairs
         self.obstacles = Obstacles(scene, include_chairs, sensed)
         self.radius_m = robot_radius_m
         self.time_limit_s = time_limit_s
+        self.iterations = iterations
 
     def with_sensed(self, points: Sequence[Point]) -> Navigator:
         """This navigator also avoiding ``points`` the robot's sensors saw (room frame),
@@ -168,7 +181,8 @@ class Navigator:
         if not discs:
             return self
         return Navigator(self.scene, self.radius_m, include_chairs=self.include_chairs,
-                         time_limit_s=self.time_limit_s, sensed=discs)
+                         time_limit_s=self.time_limit_s, sensed=discs,
+                         iterations=self.iterations)
 
     def valid(self, xy: Floats) -> NDArray[np.bool_]:
         """Whether the base fits at each room-frame point of ``xy`` (``(N, 2)``)."""
@@ -256,7 +270,18 @@ def _ompl_path(nav: Navigator, start: Point, goal: Point, seed: int, margin_m: f
     planner = og.RRTConnect(si)
     planner.setProblemDefinition(pdef)
     planner.setup()
-    planner.solve(nav.time_limit_s)
+    # The bindings have no iteration condition of their own. RRTConnect evaluates this one
+    # once per iteration (and a few times more while it takes the start and goal, the same
+    # number each time), and stops by itself on an exact solution.
+    done = [0]
+
+    def enough() -> bool:
+        done[0] += 1
+        return done[0] > nav.iterations
+
+    planner.solve(ob.plannerOrTerminationCondition(
+        ob.PlannerTerminationCondition(enough),
+        ob.timedPlannerTerminationCondition(nav.time_limit_s)))
     if not pdef.hasExactSolution():
         return None
     path = pdef.getSolutionPath()

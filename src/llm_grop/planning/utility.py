@@ -32,7 +32,7 @@ from llm_grop.planning.feasibility import (
     action_times,
     placing,
 )
-from llm_grop.planning.navigation import NavGraph
+from llm_grop.planning.navigation import PATH_TIME_LIMIT_S, NavGraph
 from llm_grop.planning.occupancy import build_grid
 from llm_grop.planning.standing import (
     blocked_reason,
@@ -58,7 +58,9 @@ class GropOptions:
         standoffs_m: distances from the table's edge to the base's footprint, metres.
         grid_resolution_m: cell size of the cost-to-go fields, metres.
         alternatives: fallback standing positions kept per object.
-        path_time_limit_s: OMPL's time limit for one navigation path, seconds.
+        path_time_limit_s: OMPL's time limit for one navigation path, seconds: a safety
+            net only, as a path ends on its iterations (see
+            :data:`~llm_grop.planning.navigation.PATH_TIME_LIMIT_S`).
         fidelity_w_s_per_cm: seconds of utility that one centimetre of infidelity costs
             (a configuration's summed gap errors plus its origin's shift; see
             :attr:`~llm_grop.world.fidelity.Fidelity.infidelity_m`). 0 ignores fidelity.
@@ -69,7 +71,7 @@ class GropOptions:
     standoffs_m: tuple[float, ...] = (0.05, 0.10, 0.15, 0.25)
     grid_resolution_m: float = 0.05
     alternatives: int = 3
-    path_time_limit_s: float = 0.5
+    path_time_limit_s: float = PATH_TIME_LIMIT_S
     fidelity_w_s_per_cm: float = DEFAULTS.fidelity_weight
 
     def __post_init__(self) -> None:
