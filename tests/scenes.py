@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from llm_grop.simulation.outcomes import BaseOutcomes
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.geometry2d import Box, Pose2D
 from llm_grop.world.robot import Robot
@@ -47,7 +48,7 @@ def config(*placements: Placement) -> Configuration:
 
 
 @dataclass(frozen=True)
-class Constant:
+class Constant(BaseOutcomes):
     """A true success model with fixed probabilities (within reach)."""
 
     nav: float

@@ -189,7 +189,7 @@ class Kinematic2DSession:
         p = self.truth.navigation(self._clearance(goal.x, goal.y))
         if self.rng.random() < p:
             duration = leg_duration_s(self.pose, goal, route, self.robot) \
-                + float(getattr(self.truth, "leg_overhead_s", 0.0))
+                + float(self.truth.leg_overhead_s)
             self.pose = self._arrive(goal)
             error_m, error_rad = arrival_error(self.pose, goal)
             return self._step(ExecutedStep(
@@ -219,7 +219,7 @@ class Kinematic2DSession:
         """The reach to ``(x, y)`` (room frame, metres), and the failed step when the arm
         cannot reach it."""
         reach = math.hypot(x - self.pose.x, y - self.pose.y)
-        limit = getattr(self.truth, "reach_max_m", None) or self.robot.reach_max_m
+        limit = self.truth.reach_limit_m(self.robot)
         if self.robot.reach_min_m <= reach < limit:
             return reach, None
         return reach, self._step(ExecutedStep(
@@ -259,8 +259,7 @@ class Kinematic2DSession:
         if failed is not None:
             return failed
         standing, seconds = self.pose, self._seconds("place")
-        place = getattr(self.truth, "placing", self.truth.manipulation)
-        if self.rng.random() < place(reach, self.robot):
+        if self.rng.random() < self.truth.placing(reach, self.robot):
             dx, dy = self.rng.normal(0.0, self.o.place_noise_std_m, 2)
             dyaw = float(self.rng.normal(0.0, self.o.place_yaw_noise_std_rad))
             self._land(name, q.x + float(dx), q.y + float(dy), q.theta + dyaw, on)
@@ -284,9 +283,8 @@ class Kinematic2DSession:
         return self._step(ExecutedStep("place", True, seconds, name, standing=standing))
 
     def _seconds(self, action: str) -> float:
-        """How long a pick or place attempt takes: the truth's time, else the robot's."""
-        own = getattr(self.truth, f"{action}_time_s", None)
-        return float(own if own is not None else getattr(self.robot, f"{action}_time_s"))
+        """How long a pick or place attempt takes (the truth's declaration)."""
+        return self.truth.attempt_time_s(action, self.robot)
 
     def _land(self, name: str, x: float, y: float, yaw: float, on: str | None,
               tilt_rad: float = 0.0) -> None:

@@ -25,15 +25,56 @@ from llm_grop.world.robot import Robot
 
 
 class Outcomes(Protocol):
-    """The true success probabilities of the robot's actions, one action at a time."""
+    """The true success probabilities and durations of the robot's actions, one action at
+    a time: what a truth declares (:class:`BaseOutcomes` gives the defaults of a truth
+    that states only probabilities)."""
+
+    #: Seconds added to every drive beyond its path at full speed and its turns.
+    leg_overhead_s: float
 
     def navigation(self, clearance_m: float) -> float:
         """Probability that navigating to a goal with this clearance (metres) succeeds."""
         ...
 
     def manipulation(self, reach_m: float, robot: Robot) -> float:
-        """Probability that a pick or a place at this reach (metres) succeeds."""
+        """Probability that a pick at this reach (metres) succeeds."""
         ...
+
+    def placing(self, reach_m: float, robot: Robot) -> float:
+        """Probability that a place at this reach (metres) succeeds."""
+        ...
+
+    def reach_limit_m(self, robot: Robot) -> float:
+        """The reach (metres) at and beyond which the arm cannot pick or place."""
+        ...
+
+    def attempt_time_s(self, action: str, robot: Robot) -> float:
+        """Seconds one ``pick`` or ``place`` attempt takes, whether it succeeds or not."""
+        ...
+
+
+class BaseOutcomes:
+    """The defaults of a truth that states only :meth:`navigation` and
+    :meth:`manipulation`: places succeed as picks do, the arm reaches as far as the
+    robot's, attempts take the robot's times and drives no overhead."""
+
+    leg_overhead_s: float = 0.0
+
+    def manipulation(self, reach_m: float, robot: Robot) -> float:
+        """Probability that a pick at this reach (metres) succeeds."""
+        raise NotImplementedError
+
+    def placing(self, reach_m: float, robot: Robot) -> float:
+        """Probability that a place at this reach succeeds: a pick's."""
+        return self.manipulation(reach_m, robot)
+
+    def reach_limit_m(self, robot: Robot) -> float:
+        """The robot's full reach, metres."""
+        return robot.reach_max_m
+
+    def attempt_time_s(self, action: str, robot: Robot) -> float:
+        """The robot's own seconds for ``action``."""
+        return robot.pick_time_s if action == "pick" else robot.place_time_s
 
 
 @dataclass(frozen=True)
@@ -61,3 +102,13 @@ class ParametricOutcomes(Curves):
     def placing(self, reach_m: float, robot: Robot) -> float:
         """Probability that a place at this reach (metres) succeeds."""
         return float(self.manipulation_p(reach_m, robot, place=True))
+
+    def reach_limit_m(self, robot: Robot) -> float:
+        """The profile's full reach, else the robot's, metres."""
+        return self.reach_max_m or robot.reach_max_m
+
+    def attempt_time_s(self, action: str, robot: Robot) -> float:
+        """The profile's seconds for ``action``, else the robot's."""
+        own = self.pick_time_s if action == "pick" else self.place_time_s
+        mine = robot.pick_time_s if action == "pick" else robot.place_time_s
+        return float(own if own is not None else mine)

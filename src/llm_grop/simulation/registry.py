@@ -51,11 +51,12 @@ def simulator_class(name: str) -> type[Simulator]:
 
 
 #: Settings of the record that are one simulator's option, and that simulator.
-_SHORTHANDS = {"grasp": ("fix", "mujoco"), "truth": (None, "kinematic2d")}
+_SHORTHANDS = {"grasp": (DEFAULTS.grasp, "mujoco"), "truth": (DEFAULTS.truth, "kinematic2d")}
 
 
 def create_simulator(name: str = DEFAULT_SIMULATOR, options: Mapping[str, Any] | None = None,
-                     *, grasp: str = "fix", truth: str | None = None) -> Simulator:
+                     *, grasp: str = DEFAULTS.grasp, truth: str | None = DEFAULTS.truth
+                     ) -> Simulator:
     """A new simulator by name, built with ``options`` (its declared ``Options`` by name,
     checked); :class:`BadInput` for an unknown name or option. ``grasp`` (MuJoCo's hand)
     and ``truth`` (the profile the 2D draws follow) are options of one simulator each,

@@ -8,6 +8,7 @@ from typing import Literal, get_args
 from pydantic import ConfigDict
 
 from llm_grop.errors import BadInput
+from llm_grop.settings import DEFAULTS
 
 #: How the hand holds an object: ``fix``, a weld that attaches only on a squeezing grip
 #: (Gazebo's grasp-fix), or ``friction``, contact friction alone.
@@ -118,7 +119,7 @@ class MujocoOptions:
 
     base: BaseOptions = field(default_factory=BaseOptions)
     lidar: LidarOptions = field(default_factory=LidarOptions)
-    grasp: Grasp = "fix"
+    grasp: Grasp = DEFAULTS.grasp  # type: ignore[assignment]
     chair_mass_kg: float = 5.0
     chair_friction: float = 0.5
     nav_noise_var_m2: float = 0.0
