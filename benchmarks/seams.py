@@ -8,6 +8,8 @@ Prints, for ``--src`` (default: this checkout's ``src/llm_grop``):
 * the largest parameter count of a public function or method (``self`` and ``*args`` /
   ``**kwargs`` not counted), and the five largest;
 * every ``getattr``/``hasattr`` call, by file;
+* which plugin kinds declare an ``Options`` of their own (the simulator's ``Simulator``,
+  the LLM backend's ``BaseLLM``, the method's ``Method``);
 * lines of Python and the largest module.
 
 Run it on an older tree to compare: ``git worktree add /tmp/old c269926`` then
@@ -85,6 +87,29 @@ def probes(files: list[Path], root: Path) -> dict[str, int]:
     return out
 
 
+#: Each plugin kind's declaring class, and its module under the package.
+KINDS = {"simulator": ("Simulator", "simulation/base.py"),
+         "LLM backend": ("BaseLLM", "llm/base.py"),
+         "method": ("Method", "methods/base.py")}
+
+
+def declared_kinds(root: Path) -> dict[str, bool]:
+    """Whether each plugin kind's class declares ``Options`` (an assignment, annotation or
+    property of that name in its body)."""
+    out = {}
+    for kind, (cls, module) in KINDS.items():
+        tree = ast.parse((root / module).read_text(encoding="utf-8"))
+        body = next((n.body for n in ast.walk(tree)
+                     if isinstance(n, ast.ClassDef) and n.name == cls), [])
+        names = {t.id for n in body if isinstance(n, ast.Assign) for t in n.targets
+                 if isinstance(t, ast.Name)}
+        names |= {n.target.id for n in body
+                  if isinstance(n, ast.AnnAssign) and isinstance(n.target, ast.Name)}
+        names |= {n.name for n in body if isinstance(n, ast.FunctionDef)}
+        out[kind] = "Options" in names
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--src", type=Path,
@@ -105,6 +130,9 @@ def main() -> None:
     print(f"getattr/hasattr calls: {sum(found.values())} in {len(found)} files")
     for name, n in sorted(found.items(), key=lambda kv: -kv[1]):
         print(f"  {n:2d} {name}")
+    kinds = declared_kinds(root)
+    print(f"plugin kinds that declare their own Options: {sum(kinds.values())} of {len(kinds)} "
+          f"({', '.join(k for k, v in kinds.items() if v) or 'none'})")
     sizes = {f: len(f.read_text(encoding="utf-8").splitlines()) for f in files}
     big = max(sizes, key=lambda f: sizes[f])
     print(f"lines of Python: {sum(sizes.values())} in {len(files)} modules; largest "

@@ -242,7 +242,7 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
     tasks = job.tasks if job.tasks is not None or not s.task_files \
         else load_tasks(s.task_files)
     options = arrange_options(s, job.bases.arrange)
-    chosen = get_method(s.method)
+    chosen = get_method(s.method, dict(s.method_options))
     feasibility_profile(s.feasibility)  # an unknown profile is reported before any work
     planner = planner_options(s, job.bases.planner)
     base = job.scene if job.scene is not None else load_scene(s.scene)

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.execution import ExecutionPolicy
-from llm_grop.llm.base import LLM, BackendOptions, CallLog, SamplingParams
+from llm_grop.llm.base import LLM, BackendOptions, BaseLLM, CallLog, SamplingParams
 from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import BACKENDS, create_llm
 from llm_grop.planning.utility import GropOptions
@@ -148,22 +148,31 @@ def call_log(llm: LLM, *, record: str | PathLike[str] | None = None,
              cache: str | PathLike[str] | None = None) -> CallLog:
     """A fresh log of ``llm``'s calls: appended to the JSONL file ``record``, answered
     from the LLM cache in directory ``cache`` where asked before (``None``: neither).
-    The one way the API, the bench's trials and the service log an LLM."""
+    The one way the API, the bench's trials and the service log an LLM; a backend kept
+    from run to run starts each log afresh (:meth:`~llm_grop.llm.base.BaseLLM.for_run`)."""
+    if isinstance(llm, BaseLLM):
+        llm = llm.for_run()  # type: ignore[assignment]
     return CallLog(llm, Path(record) if record is not None else None,
                    cache=LLMCache(cache) if cache is not None else None)
 
 
 def make_backend(s: RunSettings, base: BackendOptions | None = None) -> LLM:
-    """The record's LLM backend, built (a model is loaded) now."""
-    return create_llm(s.llm, backend_options(s, base))
+    """The record's LLM backend with its own options, built (a model is loaded) now."""
+    return create_llm(s.llm, backend_options(s, base), own=dict(s.backend_options))
 
 
 def check_backend(s: RunSettings) -> None:
     """:class:`~llm_grop.errors.BadInput` for a backend the record ``s`` cannot use, found
-    before any work: an unknown name, or ``replay`` without its file."""
+    before any work: an unknown name, options it does not declare, or ``replay`` without
+    its file."""
     from llm_grop.errors import BadInput
+    from llm_grop.llm.registry import backend_options_class
+    from llm_grop.settings.declared import declared_options
 
-    if BACKENDS.key(s.llm) == "replay" and s.replay is None:
+    key = BACKENDS.key(s.llm)
+    declared_options(backend_options_class(key), dict(s.backend_options),
+                     owner=f"LLM backend {key!r}", param="backend_options")
+    if key == "replay" and s.replay is None:
         raise BadInput("needs replay=FILE, a JSONL file of recorded calls", param="llm",
                        value="replay", mentions=("replay",))
 

@@ -118,7 +118,7 @@ def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> Non
     (SWEEP.replace("chairs: [0, 2]", "chairs: []"), "s.yaml: grid.chairs: must not be empty"),
     (SWEEP.replace("chairs: [0, 2]", "colour: [red]"),
      "s.yaml: grid.colour: unknown key; expected one of tasks, methods, trials, images, llm, "
-     "seed, task_files, catalog_files, scene, chairs, table, m, "),
+     "seed, method_options, task_files, catalog_files, scene, chairs, table, m, "),
     (SWEEP.replace("trials: 2", "trials: 2\nchairs: 1"),
      "s.yaml: chairs: both in grid and at the top level; give it in one place"),
     (SWEEP.replace("backend: replay", "backend: replay, temprature: 0.5"),

@@ -186,3 +186,21 @@ def test_append_to_a_folder_is_bad_input(tmp_path: Path) -> None:
     where = re.escape(str(tmp_path))
     with pytest.raises(BadInput, match=f"^{where}: cannot append the LLM call record"):
         append_record(tmp_path, LLMCallRecord("embedded", "m", "p", "r", 0.1))
+
+
+def test_each_run_is_served_as_if_it_came_first(chat_server: ChatServer,
+                                                tmp_path: Path) -> None:
+    # A bench worker or the service keeps one backend for many runs: the order of a key's
+    # repeated answers starts afresh in each run's call log, so no run depends on another.
+    from llm_grop.assembly import call_log
+
+    path = tmp_path / "calls.jsonl"
+    record_run(chat_server, path)
+    backend = ReplayLLM(BackendOptions(replay_path=path))
+    runs = []
+    for _ in range(3):
+        log = call_log(backend)
+        runs.append([log.complete("Where does the fork go?", SamplingParams(seed=1)).response
+                     for _ in range(2)])
+    assert runs == [["answer 1 to Where does the fork go?",
+                     "answer 4 to Where does the fork go?"]] * 3

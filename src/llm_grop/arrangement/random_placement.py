@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -71,6 +72,11 @@ class DrawBox:
 AUTHORS_BOX = DrawBox((SIGMA_M, SIGMA_M), (TRUNCATION_M, TRUNCATION_M))
 
 
+#: Where the baselines draw: ``authors``, the authors' box (grown when it cannot hold the
+#: objects); ``place``, each diner's whole place from the start.
+DrawBoxChoice = Literal["authors", "place"]
+
+
 def grown_box(place: Place) -> DrawBox:
     """The box a diner's draws grow to when the authors' box cannot hold the objects: along
     each axis, ``place``'s half-extent where that is larger than :data:`TRUNCATION_M`, with
@@ -80,10 +86,12 @@ def grown_box(place: Place) -> DrawBox:
 
 
 def random_configurations(items: Sequence[Item], table: Table, rng: np.random.Generator,
-                          m: int = DEFAULTS.m) -> tuple[Configuration, ...]:
+                          m: int = DEFAULTS.m, *, box: DrawBoxChoice = "authors"
+                          ) -> tuple[Configuration, ...]:
     """``m`` configurations with every item drawn at random around its diner's place
     centre, on the table and without overlaps, in the authors' box or, when that cannot
-    hold the items, in the grown box (see the module doc). An item's ``diner`` is its
+    hold the items, in the grown box (see the module doc); ``box="place"`` draws in the
+    grown box from the start. An item's ``diner`` is its
     seat's index in ``table.seats`` (``None``: the first). Raises :class:`Infeasible` when
     an item cannot lie on the table or a configuration is not found in either box."""
     order = sorted(range(len(items)), key=lambda i: -Footprint.of_spec(items[i].spec).area)
@@ -100,7 +108,7 @@ def random_configurations(items: Sequence[Item], table: Table, rng: np.random.Ge
     place = [seated[it.diner or 0] for it in items]
     authors = [AUTHORS_BOX] * len(items)
     grown = [grown_box(p) for p in place]
-    boxes = authors
+    boxes = authors if box == "authors" else grown
     out = []
     for _ in range(m):
         found = _one(items, feet, place, boxes, order, table, rng)

@@ -124,7 +124,7 @@ BENCH_DEFAULTS: dict[str, Any] = {"tasks_text": "paper", "trials": 20,
 @click.option("--out", "out_dir", default=Path("bench"), show_default=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="Results directory; rerunning into it resumes.")
-@flags("seed", "scene", "chairs", *ROOM_FIELDS, "task_files", help={
+@flags("method_options", "seed", "scene", "chairs", *ROOM_FIELDS, "task_files", help={
     "seed": "Seed of trial 0 (trial k: seed+k).",
     "chairs": "Chairs sampled near the table in every trial [default: the scene's own, "
               "else 1]."})
@@ -205,7 +205,9 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     if not no_images and sim.supports_pictures:
         sim.check_rendering()  # a simulator that renders says now if it cannot
     settings = settings.with_values(llm=BACKENDS.key(settings.llm), simulator=sim.name)
-    if any(get_method(m).arrangement.uses_llm for m in methods):
+    # Each method is built with the options now, so a bad one is reported before any trial.
+    if any(get_method(m, dict(settings.method_options)).arrangement.uses_llm
+           for m in methods):
         make_backend(settings)
     scene = load_scene(settings.scene)  # a bad scene is reported before any trial runs
     if settings.table is not None:

@@ -24,9 +24,9 @@ def plugins() -> None:
     from rich.table import Table as RichTable
 
     from llm_grop.experiment.executors import EXECUTORS
-    from llm_grop.llm.registry import BACKENDS
+    from llm_grop.llm.registry import BACKENDS, backend_options_class
     from llm_grop.methods.registry import METHODS
-    from llm_grop.simulation.base import option_names
+    from llm_grop.settings.declared import option_defaults
     from llm_grop.simulation.registry import SIMULATORS, simulator_class
 
     table = RichTable(title="Available components", title_justify="left")
@@ -38,8 +38,21 @@ def plugins() -> None:
                           registry.origin(name))
     console = Console()
     console.print(table)
+    own = RichTable(title="Options each LLM backend and method declares (--llm-option and "
+                          "--method-option KEY=VALUE set one; the defaults shown)",
+                    title_justify="left")
+    for column in ("kind", "name", "options"):
+        own.add_column(column)
+    for registry, declared in ((BACKENDS, backend_options_class),
+                               (METHODS, lambda n: METHODS.get(n).Options)):
+        for name in registry.names():
+            try:
+                own.add_row(registry.kind, name, option_defaults(declared(name)))
+            except BadInput as exc:
+                own.add_row(registry.kind, name, f"cannot load: {exc}")
+    console.print(own)
     sims = RichTable(title="What each simulator declares (--sim-option KEY=VALUE sets an "
-                           "option)", title_justify="left")
+                           "option; the defaults shown)", title_justify="left")
     for column in ("simulator", "options", "pictures", "video", "cameras"):
         sims.add_column(column)
     for name in SIMULATORS.names():
@@ -48,7 +61,7 @@ def plugins() -> None:
         except BadInput as exc:
             sims.add_row(name, f"cannot load: {exc}", "", "", "")
             continue
-        sims.add_row(name, ", ".join(option_names(cls)), _yes(cls.supports_pictures),
+        sims.add_row(name, option_defaults(cls.Options), _yes(cls.supports_pictures),
                      _yes(cls.supports_video), ", ".join(cls.cameras) or "-")
     console.print(sims)
 

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 @click.command(epilog=EPILOG)
 @VERBOSE
 @click.argument("request", required=False)
-@flags("task", "scene", "method", "seed", "chairs", *ROOM_FIELDS)
+@flags("task", "scene", "method", "method_options", "seed", "chairs", *ROOM_FIELDS)
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write the run JSON here.")
 @click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -81,13 +82,19 @@ def serve(host: str, port: int, backends: tuple[str, ...], replay: Path | None,
     if replay is not None and not replay.is_file():
         raise BadInput("no such file", param="replay", value=replay)
     from llm_grop.assembly import backend_options
+    from llm_grop.llm.registry import backend_options_class
+    from llm_grop.settings.declared import declared_options
 
-    options = backend_options(from_flags(
-        flags, replay=replay.absolute() if replay else None))
+    settings = from_flags(flags, replay=replay.absolute() if replay else None)
+    options = backend_options(settings)
+    # Each backend offered takes --llm-option, checked against what it declares.
+    offered = tuple(Backend(n, replace(options, own=declared_options(
+        backend_options_class(n), dict(settings.backend_options),
+        owner=f"LLM backend {n!r}", param="backend_options"))) for n in names)
     db = (db or _default_db()).expanduser().absolute()
     check_out_dir("db", db.parent)
     db.parent.mkdir(parents=True, exist_ok=True)  # checked above: it can be made
-    config = ServiceConfig(db=db, backends=tuple(Backend(n, options) for n in names),
+    config = ServiceConfig(db=db, backends=offered,
                            workers=workers, token=token,
                            limits=Limits(run_time_s=run_time_s, queue=queue,
                                          jobs_per_client=runs_per_client),

@@ -113,7 +113,8 @@ class TrialRunner:
         task = self.tasks[spec.task]
         settings = self.settings.run.with_values(method=spec.method, task=spec.task,
                                                  seed=spec.seed)
-        llm_log = self.llm() if get_method(spec.method).arrangement.uses_llm else None
+        llm_log = self.llm() if get_method(spec.method, dict(settings.method_options)
+                                           ).arrangement.uses_llm else None
         # A scene that seats several diners sets the task's objects once for each of them.
         requested = [i.name for i in seat_items(items_from_names(task.objects, self.catalog),
                                                 self.top)]

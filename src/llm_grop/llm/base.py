@@ -7,11 +7,12 @@ import time
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 from llm_grop.llm.cache import CallKey, LLMCache, backend_identity
 from llm_grop.llm.record import LLMCallRecord, append_record
 from llm_grop.settings import DEFAULTS
+from llm_grop.settings.declared import NoOptions
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +47,9 @@ class BackendOptions:
     5xx). ``max_answer_bytes``: the largest answer accepted, bytes.
     ``replay_path``: the JSONL file the replay backend reads.
     ``n_threads``: CPU threads for the embedded model (``None``: all cores).
+    ``own``: the backend's own options, an instance of the ``Options`` it declares
+    (:class:`BaseLLM`), checked by :func:`~llm_grop.llm.registry.create_llm`; ``None``:
+    its defaults.
     """
 
     model: str | None = None
@@ -56,6 +60,7 @@ class BackendOptions:
     max_answer_bytes: int = DEFAULTS.max_answer_bytes
     replay_path: Path | None = None
     n_threads: int | None = None
+    own: Any = None
 
 
 @runtime_checkable
@@ -92,10 +97,27 @@ class LLM(Protocol):
 
 class BaseLLM:
     """The declarations of :class:`LLM` with the defaults a plugin backend inherits: no
-    JSON Schema, never cached, nothing to release."""
+    JSON Schema, never cached, nothing to release, no options of its own.
 
+    A backend class registered as the factory declares its own options as ``Options``, a
+    frozen dataclass (the way simonw/llm's models declare theirs): users set them with
+    ``--llm-option KEY=VALUE`` (``llm.options`` in a sweep file), the registry checks them
+    against it and hands the instance over as :attr:`BackendOptions.own`.
+    """
+
+    Options: ClassVar[type] = NoOptions
     supports_schema: bool = False
     cache_identity: str | None = None
+
+    def for_run(self) -> BaseLLM:
+        """The backend for one run's call log: itself; a backend that keeps state from
+        call to call of a run (the replay's order of repeated answers) returns a copy with
+        that state fresh, so that no run's answers depend on the runs before it."""
+        return self
+
+    def own_options(self, options: BackendOptions) -> Any:
+        """The backend's own options in ``options`` (its declared defaults when none)."""
+        return options.own if options.own is not None else self.Options()
 
     def close(self) -> None:
         """Release what the backend holds (nothing, by default)."""

@@ -7,9 +7,10 @@ offline default for tests and demonstrations.
 
 - ``BackendOptions.model``: a path to another GGUF file; ``None`` (or the default
   model's name) picks the bundled one.
-- Context window: :data:`N_CTX` tokens, room for a prompt template's prompt plus
-  ``max_tokens`` (llama.cpp cuts the completion at the window); a prompt longer than
-  the window raises :class:`LLMError`.
+- Context window: :data:`N_CTX` tokens (its option ``context_tokens``, ``--llm-option
+  context_tokens=4096``), room for a prompt template's prompt plus ``max_tokens``
+  (llama.cpp cuts the completion at the window); a prompt longer than the window raises
+  :class:`LLMError`.
 - Threads: ``BackendOptions.n_threads``, else every CPU.
 - Determinism: a call is a function of (prompt, seed, sampling settings, grammar)
   alone, within a process and across processes on the same build of llama.cpp.
@@ -28,9 +29,12 @@ import tempfile
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from importlib import metadata, resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
+
+from pydantic import Field
 
 from llm_grop.errors import BadInput, LLMError, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, BaseLLM, SamplingParams
@@ -48,6 +52,17 @@ BUNDLED_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"
 
 #: Context window in tokens (prompt plus completion).
 N_CTX = 2048
+
+
+@dataclass(frozen=True)
+class EmbeddedOptions:
+    """The embedded backend's own options.
+
+    ``context_tokens``: llama.cpp's context window, tokens (prompt plus completion).
+    """
+
+    context_tokens: Annotated[int, Field(ge=256, le=131072)] = N_CTX
+
 
 #: Seed llama.cpp starts from; per-call seeds replace it.
 _LOAD_SEED = 1
@@ -67,8 +82,10 @@ class EmbeddedLLM(BaseLLM):
     """
 
     backend: str = "embedded"
+    Options = EmbeddedOptions
 
     def __init__(self, options: BackendOptions) -> None:
+        self._n_ctx: int = self.own_options(options).context_tokens
         self._custom_path: Path | None = None
         if options.model is not None and options.model != DEFAULT_MODEL:
             path = Path(options.model).expanduser()
@@ -90,6 +107,9 @@ class EmbeddedLLM(BaseLLM):
         package's version, or a GGUF file's path, size and time) and llama.cpp's version,
         whose updates may change answers."""
         llama = _version("llama-cpp-python")
+        # A window other than the default is named, as llama.cpp's batches follow it.
+        if self._n_ctx != N_CTX:
+            llama += f":ctx{self._n_ctx}"
         if self._custom_path is None:
             return f"embedded:{DEFAULT_MODEL}:{_version(BUNDLED_PACKAGE)}:{llama}"
         path = self._custom_path.resolve()
@@ -156,7 +176,8 @@ class EmbeddedLLM(BaseLLM):
         start = time.perf_counter()
         try:
             # verbose=False routes llama.cpp's load chatter to /dev/null.
-            self._llama = Llama(model_path=str(path), n_ctx=N_CTX, n_threads=self._n_threads,
+            self._llama = Llama(model_path=str(path), n_ctx=self._n_ctx,
+                                n_threads=self._n_threads,
                                 n_threads_batch=self._n_threads, seed=_LOAD_SEED,
                                 verbose=False)
         except (ValueError, RuntimeError, OSError) as exc:

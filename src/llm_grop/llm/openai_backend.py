@@ -38,6 +38,7 @@ import re
 import threading
 import time
 from collections.abc import Mapping
+from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
@@ -76,6 +77,18 @@ _TIMEOUTS: tuple[type[Exception], ...] = tuple(m.TimeoutException for m in _http
 _HTTP_ERRORS: tuple[type[Exception], ...] = tuple(m.HTTPError for m in _http_modules())
 
 
+@dataclass(frozen=True)
+class OpenAIOptions:
+    """The openai backend's own options.
+
+    ``structured_output``: ask the server for answers that follow a JSON Schema
+    (``response_format``); ``false`` sends the prompt's own format alone, for servers
+    that mishandle the schema rather than turn it down.
+    """
+
+    structured_output: bool = True
+
+
 class OpenAILLM(BaseLLM):
     """A chat model behind an OpenAI-compatible HTTP endpoint.
 
@@ -84,10 +97,12 @@ class OpenAILLM(BaseLLM):
     """
 
     backend: str = "openai"
-    supports_schema: bool = True
+    Options = OpenAIOptions
 
     def __init__(self, options: BackendOptions) -> None:
         self.model: str = options.model or DEFAULT_MODEL
+        #: Whether calls ask for structured output (its option ``structured_output``).
+        self.supports_schema: bool = self.own_options(options).structured_output
         api_key = options.api_key or os.environ.get("OPENAI_API_KEY") or PLACEHOLDER_API_KEY
         self._max_retries = options.max_retries
         self._timeout_s = options.timeout_s

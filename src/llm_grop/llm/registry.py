@@ -1,12 +1,17 @@
 """The registry of LLM backends (see :mod:`llm_grop.plugins`): entry point group
-``llm_grop.llm_backends``; an entry is a factory ``(BackendOptions) -> LLM``."""
+``llm_grop.llm_backends``; an entry is a factory ``(BackendOptions) -> LLM``: a
+:class:`~llm_grop.llm.base.BaseLLM` subclass, which declares its own ``Options``, or a
+function, which declares none."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from dataclasses import replace
+from typing import Any
 
-from llm_grop.llm.base import LLM, BackendOptions
+from llm_grop.llm.base import LLM, BackendOptions, BaseLLM
 from llm_grop.plugins import Registry
+from llm_grop.settings.declared import NoOptions, declared_options
 
 Factory = Callable[[BackendOptions], LLM]
 
@@ -31,7 +36,25 @@ def available_backends() -> list[str]:
     return BACKENDS.names()
 
 
-def create_llm(name: str, options: BackendOptions | None = None) -> LLM:
-    """Build the backend called ``name``; its heavy imports happen only here."""
-    llm: LLM = BACKENDS.create(name, options or BackendOptions())
+def backend_options_class(name: str) -> type:
+    """The ``Options`` dataclass the backend called ``name`` declares (a factory that is
+    no :class:`BaseLLM` subclass declares none)."""
+    factory = BACKENDS.get(BACKENDS.key(name))
+    if isinstance(factory, type) and issubclass(factory, BaseLLM):
+        return factory.Options
+    return NoOptions
+
+
+def create_llm(name: str, options: BackendOptions | None = None,
+               own: Mapping[str, Any] | None = None) -> LLM:
+    """Build the backend called ``name`` with ``options`` and ``own``, its own options by
+    name (checked against the ``Options`` it declares: :class:`BadInput` naming
+    ``backend_options.KEY``); its heavy imports happen only here."""
+    options = options or BackendOptions()
+    if own or options.own is None:
+        made = declared_options(backend_options_class(name), own or {},
+                                owner=f"LLM backend {BACKENDS.key(name)!r}",
+                                param="backend_options")
+        options = replace(options, own=made)
+    llm: LLM = BACKENDS.create(name, options)
     return llm

@@ -8,6 +8,7 @@ records, and a replayed run differs from the recorded one only in ``backend``.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 from dataclasses import asdict, replace
@@ -25,8 +26,8 @@ class ReplayLLM(BaseLLM):
 
     A call is looked up by ``(prompt, seed)``; sampling settings and grammar play no
     part. When a key was recorded several times its responses are served in recorded
-    order and the last one repeats. ``model`` names the recorded model(s), joined
-    with ``+`` when the file mixes several.
+    order and the last one repeats, counted within one run (:meth:`for_run`). ``model``
+    names the recorded model(s), joined with ``+`` when the file mixes several.
     """
 
     backend: str = "replay"
@@ -47,6 +48,13 @@ class ReplayLLM(BaseLLM):
         self.cache_identity: str = "replay:" + hashlib.sha256(
             "\n".join(json.dumps(asdict(r), sort_keys=True) for r in self.records).encode()
         ).hexdigest()[:32]
+
+    def for_run(self) -> ReplayLLM:
+        """This recording with its order of repeated answers from the start: each run
+        (a bench trial, a service job) is served as if it came first."""
+        fresh = copy.copy(self)
+        fresh._served = {}
+        return fresh
 
     def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
                  ) -> LLMCallRecord:

@@ -17,16 +17,17 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from llm_grop import seeds
 from llm_grop.arrangement.pipeline import ArrangeOptions, arrange_items
-from llm_grop.arrangement.random_placement import random_configurations
+from llm_grop.arrangement.random_placement import DrawBoxChoice, random_configurations
 from llm_grop.errors import BadInput
 from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS
 from llm_grop.llm.base import CallLog
 from llm_grop.planning.grop import choose
+from llm_grop.settings.declared import NoOptions
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.fidelity import Fidelity
@@ -93,16 +94,41 @@ class StandingChoice(Protocol):
         ...
 
 
+@dataclass(frozen=True)
+class RandomOptions:
+    """The options of a method with a random arrangement.
+
+    ``draw_box``: where its objects are drawn: ``authors``, the authors' box (centres
+    within ±0.225 m of the diner's place centre), grown to the diner's whole place when it
+    cannot hold the objects; ``place``, the diner's whole place from the start.
+    """
+
+    draw_box: DrawBoxChoice = "authors"
+
+
 @runtime_checkable
 class Method(Protocol):
     """A compared method: its name and description, and what it chooses, as typed parts:
     its ``arrangement`` (an :class:`ArrangementSource`), its standing positions
     (``standing_choice``, a :class:`StandingChoice`) and its attempts per pick and place
     when executing (``manip_attempts``). The episode runs these parts and interprets no
-    flag of a method's."""
+    flag of a method's.
+
+    It declares its own options as ``Options``, a frozen dataclass (``--method-option
+    KEY=VALUE``), and :meth:`with_options` gives the method with a checked instance of it.
+    """
 
     name: str
     description: str
+
+    @property
+    def Options(self) -> type:  # noqa: N802 - named as simulators and backends name it
+        """The dataclass of its options."""
+        ...
+
+    def with_options(self, options: Any) -> Method:
+        """This method with ``options`` (an instance of :attr:`Options`)."""
+        ...
 
     @property
     def arrangement(self) -> ArrangementSource:
@@ -142,14 +168,16 @@ class LLMArrangement:
 @dataclass(frozen=True)
 class RandomArrangement:
     """The baselines' arrangement: M collision-free random configurations, drawn from
-    the seed's ``random_arrangement`` stream."""
+    the seed's ``random_arrangement`` stream, in the ``box`` the method's options name."""
 
     uses_llm: bool = False
+    box: DrawBoxChoice = "authors"
 
     def propose(self, inp: EpisodeInput) -> Proposal:
         t0 = time.perf_counter()
         rng = seeds.stream(inp.seed, "random_arrangement")
-        configs = random_configurations(inp.items, inp.table, rng, m=inp.options.m)
+        configs = random_configurations(inp.items, inp.table, rng, m=inp.options.m,
+                                        box=self.box)
         arrangement = Arrangement(inp.request, inp.table, configs[0].placements)
         return Proposal(arrangement, configs, time.perf_counter() - t0)
 
@@ -192,14 +220,28 @@ class ComposedMethod:
     standing: Literal["utility", "uniform"]
     best_of_all: bool
     manip_attempts: int = BASELINE_MANIP_ATTEMPTS
+    #: Its options, an instance of :attr:`Options` (``None``: their defaults).
+    options: Any = None
 
     def __post_init__(self) -> None:
         self.standing_choice  # noqa: B018 - a bad standing policy is refused when declared
 
     @property
+    def Options(self) -> type:  # noqa: N802 - named as simulators and backends name it
+        """:class:`RandomOptions` for a random arrangement; the LLM's takes none."""
+        return NoOptions if self.uses_llm else RandomOptions
+
+    def with_options(self, options: Any) -> ComposedMethod:
+        """This method with ``options``."""
+        return replace(self, options=options)
+
+    @property
     def arrangement(self) -> ArrangementSource:
         """The LLM's arrangement or a random one."""
-        return LLMArrangement() if self.uses_llm else RandomArrangement()
+        if self.uses_llm:
+            return LLMArrangement()
+        options = self.options if self.options is not None else RandomOptions()
+        return RandomArrangement(box=options.draw_box)
 
     @property
     def standing_choice(self) -> StandingChoice:
@@ -241,6 +283,15 @@ class GivenArrangement:
     def manip_attempts(self) -> int:
         """Attempts per pick and place: the base method's."""
         return self.base.manip_attempts
+
+    @property
+    def Options(self) -> type:  # noqa: N802 - named as simulators and backends name it
+        """None: the arrangement is given."""
+        return NoOptions
+
+    def with_options(self, options: Any) -> GivenArrangement:
+        """This method, unchanged: a given arrangement takes no options."""
+        return self
 
     def propose(self, inp: EpisodeInput) -> Proposal:
         return Proposal(self.given, (Configuration(self.given.placements),), 0.0)

@@ -4,12 +4,14 @@ is the name it is registered under."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from llm_grop.errors import BadInput
 from llm_grop.execution.policy import LLM_GROP_MANIP_ATTEMPTS
 from llm_grop.methods.base import ComposedMethod, Method
 from llm_grop.plugins import Registry
+from llm_grop.settings.declared import declared_options
 
 #: The paper's four methods (§IV).
 TPRA = ComposedMethod("tpra", "task planning with random arrangement and standing positions",
@@ -25,7 +27,8 @@ LLM_GROP = ComposedMethod("llm-grop", "LLM arrangement, utility-optimal task-mot
 def _check(name: str, obj: Any, origin: str) -> None:
     if isinstance(obj, type) or not isinstance(obj, Method):
         raise BadInput(f"{origin}: {name!r} is not a method instance (it needs a name, a "
-                       "description, an arrangement, a standing_choice and manip_attempts; "
+                       "description, an arrangement, a standing_choice, manip_attempts, "
+                       "Options and with_options; "
                        "see llm_grop.methods.base.Method)", param="method")
     if str(obj.name).strip().lower() != name:
         raise BadInput(f"{origin}: method registered as {name!r} is named "
@@ -49,6 +52,13 @@ def available_methods() -> list[str]:
     return METHODS.names()
 
 
-def get_method(name: str) -> Method:
-    """A method by name; :class:`BadInput` for an unknown one."""
-    return METHODS.get(name)
+def get_method(name: str, options: Mapping[str, Any] | None = None) -> Method:
+    """A method by name, with ``options`` (its declared ``Options`` by name, checked:
+    :class:`BadInput` naming ``method_options.KEY``); :class:`BadInput` for an unknown
+    name."""
+    method = METHODS.get(name)
+    if not options:
+        return method
+    made = declared_options(method.Options, options, owner=f"method {method.name!r}",
+                            param="method_options")
+    return method.with_options(made)

@@ -46,6 +46,23 @@ Side = Annotated[float, Field(strict=False, ge=MIN_TABLE_SIDE_M, le=MAX_TABLE_SI
 Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-100, le=100)]
 
 
+#: One value of a plugin's option: what a ``KEY=VALUE`` flag's YAML value may be.
+OptionScalar = Annotated[str, Field(strict=True, max_length=300)] | StrictBool | StrictInt \
+    | Annotated[float, Field(strict=True, allow_inf_nan=False)] | None
+OptionValue = OptionScalar | Annotated[list[OptionScalar], Field(max_length=16)]
+#: A plugin's own options by name, checked against what it declares when the job runs.
+PluginOptions = Annotated[dict[Annotated[str, Field(min_length=1, max_length=64)],
+                               OptionValue], Field(max_length=32)]
+
+
+def plugin_options(what: str) -> Any:
+    """A body's field of ``what``'s own options (``--sim-option`` and the like on the
+    command line)."""
+    return Field({}, description=f"the {what}'s own options by name, as it declares them "
+                                 "(`llm-grop plugins` lists them); options naming files are "
+                                 "refused")
+
+
 class _Body(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -112,6 +129,7 @@ class PlanBody(_Body):
     robot: tuple[Coordinate, Coordinate, Annotated[float, Field(allow_inf_nan=False)]] | None \
         = Field(None, description="the robot's pose [x, y, theta] in the room frame")
     method: Name = described("method")
+    method_options: PluginOptions = plugin_options("method")
     feasibility: Name = described("feasibility")
     llm: Name | None = None
     seed: setting("seed", StrictInt) = described("seed")
@@ -123,6 +141,7 @@ class RunBody(PlanBody):
     """``POST /v1/runs``: plan and execute in a simulator, as a job."""
 
     simulator: Name = described("simulator")
+    sim_options: PluginOptions = plugin_options("simulator")
     video: StrictBool = Field(True, description="mujoco: record a video of the episode")
 
 

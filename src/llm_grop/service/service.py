@@ -53,6 +53,7 @@ class Service:
         """Refuse what is plainly wrong before a job is queued: a request over the
         server's length, a backend, method or simulator it does not offer."""
         from llm_grop.api import available_methods, available_simulators
+        from llm_grop.service.tasks import check_plugin_options
 
         text = body.request or ""
         limit = self.config.limits.request_chars
@@ -66,6 +67,7 @@ class Service:
         if isinstance(body, RunBody) and body.simulator not in available_simulators():
             raise Refused(422, f"simulator: unknown simulator {body.simulator!r}; choose "
                                f"from {', '.join(available_simulators())}")
+        check_plugin_options(body)
 
     def submit(self, kind: Kind, body: ArrangeBody | PlanBody, client: str) -> str:
         """Queue a checked job for ``client`` (its address); its id. 429 when full."""

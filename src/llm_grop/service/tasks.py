@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -73,6 +73,31 @@ def _settings(body: ArrangeBody | PlanBody) -> RunSettings:
     them as the record does; the LLM is the server's, chosen apart)."""
     return RunSettings.make({name: getattr(body, name) for name in type(body).model_fields
                              if name in RunSettings.model_fields and name not in _APART})
+
+
+def check_plugin_options(body: ArrangeBody | PlanBody) -> None:
+    """:class:`BadInput` for a body's method or simulator options that the plugin does not
+    declare, of the wrong type, or naming a file: a client never chooses where the server
+    reads or writes."""
+    from llm_grop.methods.registry import get_method
+    from llm_grop.simulation.registry import simulator_class
+
+    if isinstance(body, PlanBody):
+        _checked(get_method(body.method).Options, body.method_options,
+                 f"method {body.method!r}", "method_options")
+    if isinstance(body, RunBody):
+        _checked(simulator_class(body.simulator).Options, body.sim_options,
+                 f"simulator {body.simulator!r}", "sim_options")
+
+
+def _checked(options: type, given: Mapping[str, Any], owner: str, param: str) -> None:
+    from llm_grop.settings.declared import declared_options, path_options
+
+    named = [k for k in given if k in path_options(options)]
+    if named:
+        raise BadInput("names a file on the server, which a client may not choose",
+                       param=f"{param}.{named[0]}")
+    declared_options(options, given, owner=owner, param=param)
 
 
 def _table(body: ArrangeBody) -> Table:
@@ -150,6 +175,7 @@ def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
         if body.arrangement is not None else None
     if arrangement is not None:
         _check_size(len(arrangement.placements), config)
+    check_plugin_options(body)
     settings = _settings(body)
     planned = plan(body.request, settings, arrangement=arrangement, scene=_scene(body),
                    table=body.table.table() if body.table is not None else None,
@@ -183,7 +209,8 @@ def _run(body: RunBody, config: ServiceConfig, llms: Backends,
     with tempfile.TemporaryDirectory(prefix="run-", dir=config.scratch) as tmp:
         video = Path(tmp) / "episode.mp4"
         films = body.video and simulator_class(body.simulator).supports_video
-        sim = create_simulator(body.simulator, {"video_path": str(video)} if films else None)
+        sim = create_simulator(body.simulator, body.sim_options | (
+            {"video_path": str(video)} if films else {}))
         if renders:
             sim.check_rendering()
         planned = _planned(body, config, llms, on_event, check=sim.check)

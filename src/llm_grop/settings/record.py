@@ -98,6 +98,13 @@ def _pairs(value: Any) -> Any:
     return _frozen(pairs)
 
 
+#: A plugin's own options by name (sorted ``(key, value)`` pairs; a mapping, or
+#: ``KEY=VALUE`` texts, in), checked by the registry against the ``Options`` the plugin
+#: declares (:mod:`llm_grop.settings.declared`).
+Pairs = Annotated[tuple[tuple[str, Any], ...], BeforeValidator(_pairs), PlainSerializer(dict),
+                  WithJsonSchema({"type": "object"})]
+
+
 class RunSettings(BaseModel):
     """Everything that shapes one run (units in each field's help). Immutable: build one
     with the constructor (or :meth:`make` from a mapping) and change a copy with
@@ -115,6 +122,10 @@ class RunSettings(BaseModel):
     seed: int = setting(
         0, "Seed for the scene's chairs, the LLM, the sampler, the plan and execution.",
         group="what", ge=0, le=MAX_SEED)
+    method_options: Pairs = setting(
+        (), "An option of the method, KEY=VALUE (a YAML value), as its Options declare them "
+            "(`llm-grop plugins` lists them), e.g. draw_box=place; repeatable.",
+        group="what", door=Door(cli="--method-option", metavar="KEY=VALUE"))
     task_files: tuple[str, ...] = setting(
         (), "Extra tasks (YAML, like the packaged tasks.yaml); repeatable.", group="what",
         door=Door(cli="--task-file", path="file"))
@@ -174,8 +185,7 @@ class RunSettings(BaseModel):
     simulator: str = setting(
         "kinematic2d", "The simulator that executes the plan (see `llm-grop plugins`).",
         group="sim", min_length=1)
-    sim_options: Annotated[tuple[tuple[str, Any], ...], BeforeValidator(_pairs),
-                           PlainSerializer(dict), WithJsonSchema({"type": "object"})] = setting(
+    sim_options: Pairs = setting(
         (), "An option of the simulator, KEY=VALUE (a YAML value), as its Options declare "
             "them (`llm-grop plugins` lists them), e.g. timestep_s=0.002; repeatable.",
         group="sim", door=Door(cli="--sim-option", metavar="KEY=VALUE"))
@@ -220,6 +230,11 @@ class RunSettings(BaseModel):
     retries: int = setting(
         3, "Retries on transient LLM errors (connection, 429, 5xx).", group="backend", ge=0,
         identity=False)
+    backend_options: Pairs = setting(
+        (), "An option of the LLM backend, KEY=VALUE (a YAML value), as its Options declare "
+            "them (`llm-grop plugins` lists them), e.g. structured_output=false; repeatable.",
+        group="backend", door=Door(cli="--llm-option", sweep="llm.options",
+                                   json="llm_options", metavar="KEY=VALUE"))
     temperature: float = setting(
         0.1, "Sampling temperature of every LLM call (the paper's 0.1).", group="llm",
         ge=0, le=2, door=Door(sweep="llm.temperature"))

@@ -16,12 +16,13 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from dataclasses import fields
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
 from llm_grop.errors import BadInput
+from llm_grop.settings.declared import declared_options
+from llm_grop.settings.declared import option_names as declared_names
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, ObjectState, Point
@@ -145,33 +146,12 @@ class Simulator(ABC):
 
 def option_names(simulator: type[Simulator]) -> tuple[str, ...]:
     """The options ``simulator`` declares."""
-    return tuple(f.name for f in fields(simulator.Options))
+    return declared_names(simulator.Options)
 
 
 def options_of(simulator: type[Simulator], given: Mapping[str, Any]) -> Any:
     """``given`` (a user's values by option name) as ``simulator``'s declared options,
     each checked against its type by pydantic: the first problem is one
     :class:`~llm_grop.errors.BadInput` naming ``sim_options.KEY``."""
-    from pydantic import ConfigDict, TypeAdapter, ValidationError
-
-    from llm_grop.settings import first_reason
-
-    unknown = [k for k in given if k not in option_names(simulator)]
-    if unknown:
-        raise BadInput(f"simulator {simulator.name!r} has no option {unknown[0]!r} (its "
-                       f"options: {', '.join(option_names(simulator))})",
-                       param="sim_options")
-    adapter = TypeAdapter(simulator.Options, config=None if _configured(simulator.Options)
-                          else ConfigDict(arbitrary_types_allowed=True))
-    try:
-        return adapter.validate_python(dict(given))
-    except ValidationError as exc:
-        error = exc.errors(include_url=False)[0]
-        key = ".".join(str(k) for k in error.get("loc", ()))
-        raise BadInput(first_reason(error), param=f"sim_options.{key}",
-                       value=error.get("input")) from None
-
-
-def _configured(options: type) -> bool:
-    """Whether the options dataclass carries its own pydantic configuration."""
-    return "__pydantic_config__" in vars(options)
+    return declared_options(simulator.Options, given, owner=f"simulator {simulator.name!r}",
+                            param="sim_options")

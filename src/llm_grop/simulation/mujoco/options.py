@@ -126,7 +126,7 @@ class MujocoOptions:
     heading_noise_std_rad: float = 0.03
     timestep_s: float = 0.004
     image_size: tuple[int, int] = (640, 480)
-    video_path: str | None = None
+    video_path: str | None = field(default=None, metadata={"path": "file"})
     video_frame_s: float = 0.2
     video_fps: int = 25
     camera: Camera | None = None
