@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from dataclasses import fields as dataclass_fields
 from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -61,9 +62,9 @@ _LIFTED: dict[str, tuple[type, dict[str, str]]] = {
 #: The component record's keyword -> the field of :class:`Bases` it fills.
 _BASE_FIELD = {"options": "arrange", "planner": "planner", "llm_options": "backend",
                "execution": "execution"}
-#: Sampling settings: :class:`SamplingParams` field -> the settings record's field.
-_SAMPLING = {"temperature": "temperature", "top_p": "top_p", "max_tokens": "max_tokens",
-             "frequency_penalty": "frequency_penalty", "presence_penalty": "presence_penalty"}
+#: Sampling settings: the :class:`SamplingParams` fields the settings record holds, by the
+#: same names (the seed is each call's own).
+_SAMPLING = tuple(f.name for f in dataclass_fields(SamplingParams) if f.name != "seed")
 
 
 def settle(settings: RunSettings | None, given: dict[str, Any]) -> tuple[RunSettings, Bases]:
@@ -100,8 +101,8 @@ def _from_arrange_options(options: ArrangeOptions) -> dict[str, Any]:
     """The settings an :class:`ArrangeOptions` holds besides its lifted fields: its
     sampling and whether it leaves the examples out."""
     default = SamplingParams()
-    out = {name: getattr(options.params, attr) for attr, name in _SAMPLING.items()
-           if getattr(options.params, attr) != getattr(default, attr)}
+    out = {name: getattr(options.params, name) for name in _SAMPLING
+           if getattr(options.params, name) != getattr(default, name)}
     if options.examples == "":
         out["zero_shot"] = True
     return out
@@ -122,7 +123,7 @@ def arrange_options(s: RunSettings, base: ArrangeOptions | None = None) -> Arran
 
 def sampling(s: RunSettings) -> SamplingParams:
     """The decoding settings of every LLM call the record ``s`` makes."""
-    return SamplingParams(**{attr: getattr(s, name) for attr, name in _SAMPLING.items()})
+    return SamplingParams(**{name: getattr(s, name) for name in _SAMPLING})
 
 
 def planner_options(s: RunSettings, base: GropOptions | None = None) -> GropOptions:

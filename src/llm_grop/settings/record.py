@@ -24,6 +24,10 @@ from llm_grop.settings.reasons import problem, unknown_words
 #: The front doors a setting comes through; each names a field its own way.
 Interface = Literal["python", "cli", "sweep", "json"]
 
+#: How MuJoCo's hand holds an object: ``fix``, a weld that attaches only on a squeezing
+#: grip (Gazebo's grasp-fix), or ``friction``, contact friction alone.
+Grasp = Literal["fix", "friction"]
+
 #: The largest seed: a 32-bit generator seed.
 MAX_SEED = 2**31 - 1
 
@@ -189,7 +193,7 @@ class RunSettings(BaseModel):
         (), "An option of the simulator, KEY=VALUE (a YAML value), as its Options declare "
             "them (`llm-grop plugins` lists them), e.g. timestep_s=0.002; repeatable.",
         group="sim", door=Door(cli="--sim-option", metavar="KEY=VALUE"))
-    grasp: Literal["fix", "friction"] = setting(
+    grasp: Grasp = setting(
         "fix", "--simulator mujoco: how the hand holds. fix: a weld that attaches only when "
                "both pads squeeze the object (Gazebo's grasp-fix); friction: contact "
                "friction alone (the README lists what it can carry).", group="sim")

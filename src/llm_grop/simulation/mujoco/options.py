@@ -9,10 +9,9 @@ from pydantic import ConfigDict
 
 from llm_grop.errors import BadInput
 from llm_grop.settings import DEFAULTS
+from llm_grop.settings.record import Grasp
 
-#: How the hand holds an object: ``fix``, a weld that attaches only on a squeezing grip
-#: (Gazebo's grasp-fix), or ``friction``, contact friction alone.
-Grasp = Literal["fix", "friction"]
+#: How the hand holds an object (the settings record's ``grasp``).
 GRASPS: tuple[str, ...] = get_args(Grasp)
 
 #: The named cameras of renders and videos: ``top-down``, orthographic straight down on
