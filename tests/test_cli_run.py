@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -24,7 +25,8 @@ def test_run_writes_run_json_and_picture(chat_server, tmp_path: Path, capsys,
                  "--json", str(out_json), "--image", str(out_png)])
     assert code == 0
     printed = capsys.readouterr().out
-    assert "execution time" in printed and "planning time" in printed
+    assert "execution time" in printed and "planning" in printed
+    assert re.search(r"rated [1-5]/5", printed) and "failed attempts" in printed
     data = json.loads(out_json.read_text())
     for key in ("method", "task", "seed", "success", "execution_time_s", "planning_time_s",
                 "steps", "final"):
@@ -195,3 +197,20 @@ def test_bench_prints_each_trials_warnings(tmp_path: Path, capsys) -> None:
     assert warnings
     for w in warnings:
         assert f"warning: task 1 trial 0 llm-grop: {w}" in err.splitlines()
+
+
+def test_cached_llm_calls_are_shown_as_cached(tmp_path: Path, chat_server,  # type: ignore[no-untyped-def]
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    """A second arrangement of the same task comes from the LLM cache, and the console
+    says so rather than reporting the first call's latency as this run's."""
+    chat_server.reply = scripted([TASK1_GOOD])
+    flags = ["arrange", "--task", "1", *_openai(chat_server), "--cache-dir",
+             str(tmp_path / "c")]
+    assert main(flags) == 0
+    first = capsys.readouterr().out
+    assert main(flags) == 0
+    second = capsys.readouterr().out
+    assert "from the LLM cache" not in first
+    assert re.search(r"LLM: openai / \S+, \d+ calls?, [\d.]+ s", first)
+    assert re.search(r"\d+ calls?, all from the LLM cache \(answered at once; [\d.]+ s when "
+                     r"first asked\)", " ".join(second.split()))

@@ -75,8 +75,8 @@ def test_run_example_console_and_json_agree_with_each_other_and_a_fresh_run(
 
     console, excerpt = _block("console"), _block("json")
     config = re.search(r"configuration (\d+) of (\d+)", console)
-    result = re.search(r"Result: (\w+); execution time ([\d.]+) s .*?; failures (\d+)",
-                       console)
+    result = re.search(r"Result: (\w+), rated [1-5]/5; execution time ([\d.]+) s .*?; "
+                       r"failed attempts (\d+)", console)
     assert config and result
     number = lambda key: re.search(rf'"{key}": ([\d.]+)', excerpt)[1]  # noqa: E731
     assert int(config[1]) == int(number("configuration_index"))  # one numbering, from 0

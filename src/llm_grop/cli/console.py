@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.table import Table as RichTable
@@ -10,7 +11,11 @@ from rich.text import Text
 
 from llm_grop.arrangement.pipeline import ArrangementResult
 from llm_grop.cli.flags import cli_words
+from llm_grop.world.llmlog import LLMSummary
 from llm_grop.world.plan import ExecutedStep, RunResult
+
+if TYPE_CHECKING:
+    from llm_grop.evaluation.rater import Rating
 
 #: The longest warning line printed, in characters; a longer warning is cut with "…" (the
 #: JSON keeps it whole).
@@ -87,9 +92,7 @@ def print_arrangement(result: ArrangementResult, console: Console,
     console.print(pos_table)
     print_warnings(a.warnings, err or console)
     if a.llm is not None:
-        latency = sum(c.latency_s for c in a.llm.calls)
-        console.print(f"LLM: {a.llm.backend} / {a.llm.model}, {len(a.llm.calls)} calls, "
-                      f"{latency:.1f} s")
+        console.print(llm_line(a.llm))
 
 
 def print_run(result: RunResult, console: Console, err: Console | None = None) -> None:
@@ -122,15 +125,42 @@ def print_run(result: RunResult, console: Console, err: Console | None = None) -
     console.print(table)
     verdict = "[green]success[/green]" if ex.success else \
         f"[red]failed[/red] ({', '.join(ex.unplaced)} not placed)"
-    console.print(f"Result: {verdict}; execution time {ex.execution_time_s:.1f} s (simulated); "
-                  f"planning time {result.planning_time_s * 1000:.0f} ms; "
-                  f"failures {ex.failures}")
+    rating = final_rating(result)
+    console.print(f"Result: {verdict}, rated {rating.score}/5; execution time "
+                  f"{ex.execution_time_s:.1f} s (simulated); planning "
+                  f"{result.planning_time_s * 1000:.0f} ms; failed attempts {ex.failures}")
+    console.print(f"Rated by the automatic rater (`llm-grop rate` explains): {rating.summary}")
     print_warnings(result.planned.warnings, err or console)
     if result.planned.llm is not None:
-        llm = result.planned.llm
-        latency = sum(c.latency_s for c in llm.calls)
-        console.print(f"LLM: {llm.backend} / {llm.model}, {len(llm.calls)} calls, "
-                      f"{latency:.1f} s")
+        console.print(llm_line(result.planned.llm))
+
+
+def final_rating(result: RunResult) -> Rating:
+    """The automatic rater's 1-5 rating of the table the episode left (paper Table III),
+    against the objects that were planned."""
+    from llm_grop.contract.serialize import arrangement_doc
+    from llm_grop.evaluation.rater import rate
+
+    return rate(arrangement_doc(result.final, physical=True),
+                requested=[p.name for p in result.planned.placements])
+
+
+def llm_line(llm: LLMSummary) -> str:
+    """The LLM's one line: backend and model, the calls, which of them the cache or a
+    recording answered, and the seconds the live ones took."""
+    calls = llm.calls
+    cached = sum(c.cached for c in calls)
+    live = sum(c.latency_s for c in calls if not c.cached)
+    head = f"LLM: {llm.backend} / {llm.model}, {len(calls)} call{'s' * (len(calls) != 1)}"
+    recorded = sum(c.latency_s for c in calls)
+    if llm.backend == "replay":
+        return f"{head} replayed from a recording (recorded latency {recorded:.1f} s)"
+    if cached == len(calls) and calls:
+        return (f"{head}, all from the LLM cache (answered at once; {recorded:.1f} s when "
+                "first asked)")
+    if cached:
+        return f"{head} ({cached} from the LLM cache), {live:.1f} s"
+    return f"{head}, {live:.1f} s"
 
 
 def _attempts(steps: list[ExecutedStep]) -> str:
