@@ -120,6 +120,14 @@ def _handler(state: ChatServer) -> type[BaseHTTPRequestHandler]:
     class Handler(BaseHTTPRequestHandler):
         protocol_version = "HTTP/1.1"
 
+        def do_GET(self) -> None:
+            if self.path.rstrip("/") != "/v1/models":
+                self._send(404, {"error": {"message": f"no route {self.path}"}})
+                return
+            names = sorted(state.models) if state.models is not None else ["local-model"]
+            self._send(200, {"object": "list", "data": [
+                {"id": name, "object": "model", "owned_by": "test"} for name in names]})
+
         def do_POST(self) -> None:
             length = int(self.headers.get("content-length", "0"))
             raw = self.rfile.read(length)
@@ -166,8 +174,13 @@ def _handler(state: ChatServer) -> type[BaseHTTPRequestHandler]:
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """The tests' LLM answer cache is a fresh directory, never the user's."""
+    """The tests' LLM answer cache is a fresh directory, never the user's; ``--llm auto``
+    probes no port of the machine (a test that wants it names its own server's), so that
+    no server a developer runs changes a test's LLM."""
     os.environ["LLM_GROP_CACHE_DIR"] = tempfile.mkdtemp(prefix="llm-grop-test-cache-")
+    os.environ["LLM_GROP_PROBE_PORTS"] = ""
+    for name in ("OPENAI_BASE_URL", "OPENAI_API_KEY"):
+        os.environ.pop(name, None)
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:

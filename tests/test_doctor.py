@@ -31,7 +31,7 @@ from llm_grop.doctor.probes import check_mujoco_gl, llama_build_check
 from llm_grop.doctor.server import check_server
 
 NAMES = ["python", "llama.cpp", "embedded model", "mujoco gl", "chromium", "extra ratings",
-         "extra ray", "extra serve", "openai server"]
+         "extra ray", "extra serve", "openai server", "llm auto"]
 LINE = re.compile(r"^(ok|warn|FAIL|skip) {2,}(\S+(?: \S+)?) {2,}(.*)$")
 
 
@@ -57,8 +57,11 @@ def test_doctor_on_this_machine_finds_every_part(capsys: pytest.CaptureFixture[s
     found = report(capsys.readouterr().out)
     assert list(found) == NAMES
     assert {name: mark for name, (mark, _) in found.items()} == {
-        **dict.fromkeys(NAMES, "ok"), "openai server": "skip"}
-    assert "fix:" not in "".join(rest for _, rest in found.values())
+        **dict.fromkeys(NAMES, "ok"), "openai server": "skip", "llm auto": "warn"}
+    # Only the missing capable model has a fix to suggest.
+    assert "fix:" not in "".join(rest for name, (_, rest) in found.items()
+                                 if name != "llm auto")
+    assert "fix: start Ollama" in found["llm auto"][1]
     assert "portable build" in found["llama.cpp"][1]
     assert "no AVX-512, no AMX" in found["llama.cpp"][1]
     assert re.search(r"\d+\.\d MB, readable: .*SmolLM2-135M-Instruct\.Q4_1\.gguf",
@@ -196,9 +199,9 @@ def test_what_a_server_sends_stays_on_one_bounded_line(models_server: ModelsServ
 
 def test_an_answer_over_the_cap_fails_without_reading_it_all(
         models_server: ModelsServer, monkeypatch: pytest.MonkeyPatch) -> None:
-    from llm_grop.doctor import server
+    from llm_grop.llm import auto
 
-    monkeypatch.setattr(server, "MAX_ANSWER_BYTES", 200)
+    monkeypatch.setattr(auto, "MAX_LIST_BYTES", 200)
     models_server.models = [f"model-{k}" for k in range(50)]
     check = check_server(models_server.url, "model-1", None)
     assert check.status is Status.FAIL and "over 200 bytes" in check.detail
@@ -223,7 +226,11 @@ def test_the_command_checks_the_configured_server(
     found = json.loads(capsys.readouterr().out)
     assert [c["name"] for c in found] == NAMES
     assert set(found[0]) == {"name", "status", "detail", "fix"}
-    assert found[-1]["status"] == "ok" and "'local-model' listed" in found[-1]["detail"]
+    server = next(c for c in found if c["name"] == "openai server")
+    assert server["status"] == "ok" and "'local-model' listed" in server["detail"]
+    auto = next(c for c in found if c["name"] == "llm auto")
+    assert auto["status"] == "ok" and f"openai local-model at {models_server.url}" in \
+        auto["detail"]
 
 
 def test_an_extra_whose_package_is_missing_warns_with_the_pip_command() -> None:

@@ -13,6 +13,7 @@ What the settings record holds always comes from the record.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from dataclasses import fields as dataclass_fields
@@ -32,7 +33,13 @@ from llm_grop.world.table import Table
 from llm_grop.world.tasks import Task
 
 if TYPE_CHECKING:
+    from llm_grop.llm.auto import AutoChoice
     from llm_grop.simulation.base import Simulator
+
+log = logging.getLogger(__name__)
+
+#: The ``llm`` setting that picks a backend by what the machine offers.
+AUTO = "auto"
 
 
 @dataclass(frozen=True)
@@ -146,7 +153,8 @@ def execution_policy(s: RunSettings, base: ExecutionPolicy | None = None) -> Exe
 
 
 def call_log(llm: LLM, *, record: str | PathLike[str] | None = None,
-             cache: str | PathLike[str] | None = None) -> CallLog:
+             cache: str | PathLike[str] | None = None, chosen_by: str | None = None
+             ) -> CallLog:
     """A fresh log of ``llm``'s calls: appended to the JSONL file ``record``, answered
     from the LLM cache in directory ``cache`` where asked before (``None``: neither).
     The one way the API, the bench's trials and the service log an LLM; a backend kept
@@ -154,12 +162,34 @@ def call_log(llm: LLM, *, record: str | PathLike[str] | None = None,
     if isinstance(llm, BaseLLM):
         llm = llm.for_run()  # type: ignore[assignment]
     return CallLog(llm, Path(record) if record is not None else None,
-                   cache=LLMCache(cache) if cache is not None else None)
+                   cache=LLMCache(cache) if cache is not None else None, chosen_by=chosen_by)
 
 
 def make_backend(s: RunSettings, base: BackendOptions | None = None) -> LLM:
-    """The record's LLM backend with its own options, built (a model is loaded) now."""
+    """The record's LLM backend with its own options, built (a model is loaded) now;
+    ``auto`` is resolved first (:func:`resolve_llm`)."""
+    s, _ = resolve_llm(s)
     return create_llm(s.llm, backend_options(s, base), own=dict(s.backend_options))
+
+
+def resolve_llm(s: RunSettings) -> tuple[RunSettings, AutoChoice | None]:
+    """The record ``s`` with ``llm="auto"`` replaced by what it chooses
+    (:mod:`llm_grop.llm.auto`: the backend, its server and model), and the choice
+    (``None``: the backend was named). The choice is logged: a warning for each probed
+    port skipped, and one when it falls back to the small embedded model."""
+    if s.llm != AUTO:
+        return s, None
+    from llm_grop.llm.auto import choose
+
+    choice = choose(s.model, s.base_url)
+    for skipped in choice.skipped:
+        log.warning("--llm auto: %s", skipped)
+    if choice.weak:
+        log.warning("--llm auto: %s", choice.note)
+    else:
+        log.info("--llm auto: %s", choice.note)
+    return s.with_values(llm=choice.backend, base_url=choice.base_url,
+                         model=choice.model), choice
 
 
 def check_backend(s: RunSettings) -> None:
@@ -170,6 +200,8 @@ def check_backend(s: RunSettings) -> None:
     from llm_grop.llm.registry import backend_options_class
     from llm_grop.settings.declared import declared_options
 
+    if s.llm == AUTO:
+        return  # its options are checked once it has chosen
     key = BACKENDS.key(s.llm)
     declared_options(backend_options_class(key), dict(s.backend_options),
                      owner=f"LLM backend {key!r}", param="backend_options")
@@ -255,6 +287,9 @@ class RunInputs:
         if isinstance(self.llm, CallLog):
             return self.llm
         check_backend(self.settings)
-        backend = self.llm if self.llm is not None else make_backend(self.settings,
-                                                                     self.bases.backend)
-        return call_log(backend, record=self.record, cache=self.settings.cache)
+        if self.llm is not None:
+            return call_log(self.llm, record=self.record, cache=self.settings.cache)
+        settings, choice = resolve_llm(self.settings)
+        check_backend(settings)
+        return call_log(make_backend(settings, self.bases.backend), record=self.record,
+                        cache=settings.cache, chosen_by=choice.why if choice else None)

@@ -389,7 +389,8 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
     arrangement = Arrangement(
         request=request, table=table, placements=configs[0].placements,
         relations=relations_all,
-        llm=LLMSummary(llm.backend, llm.model, reading_calls + tuple(llm.calls[first_call:])),
+        llm=LLMSummary(llm.backend, llm.model, reading_calls + tuple(llm.calls[first_call:]),
+                       llm.chosen_by),
         warnings=reading_warnings + warnings,
         conflicts=tuple(a.conflict for a in attempts if a.conflict), read_by=read_by,
         origins=tuple((it.name, it.source, it.words) for it in items))

@@ -173,7 +173,7 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     preferences, the output directory) before any trial runs. ``threads`` are the embedded
     model's per worker.
     """
-    from llm_grop.assembly import make_backend, make_simulator
+    from llm_grop.assembly import make_backend, make_simulator, resolve_llm
     from llm_grop.experiment.runner import Experiment
     from llm_grop.experiment.trial import TrialSettings
     from llm_grop.files.scene_file import load_scene, set_target_top
@@ -204,10 +204,13 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     feasibility_profile(settings.feasibility)
     if not no_images and sim.supports_pictures:
         sim.check_rendering()  # a simulator that renders says now if it cannot
-    settings = settings.with_values(llm=BACKENDS.key(settings.llm), simulator=sim.name)
+    settings = settings.with_values(simulator=sim.name)
     # Each method is built with the options now, so a bad one is reported before any trial.
     if any(get_method(m, dict(settings.method_options)).arrangement.uses_llm
            for m in methods):
+        # The driver chooses once for every trial, and the experiment names the choice.
+        settings, _ = resolve_llm(settings)
+        settings = settings.with_values(llm=BACKENDS.key(settings.llm))
         make_backend(settings)
     scene = load_scene(settings.scene)  # a bad scene is reported before any trial runs
     if settings.table is not None:

@@ -151,7 +151,9 @@ def llm_line(llm: LLMSummary) -> str:
     calls = llm.calls
     cached = sum(c.cached for c in calls)
     live = sum(c.latency_s for c in calls if not c.cached)
-    head = f"LLM: {llm.backend} / {llm.model}, {len(calls)} call{'s' * (len(calls) != 1)}"
+    chosen = f" (auto: {llm.chosen_by})" if llm.chosen_by else ""
+    head = f"LLM: {llm.backend} / {llm.model}{chosen}, {len(calls)} " \
+        f"call{'s' * (len(calls) != 1)}"
     recorded = sum(c.latency_s for c in calls)
     if llm.backend == "replay":
         return f"{head} replayed from a recording (recorded latency {recorded:.1f} s)"

@@ -148,6 +148,9 @@ class LLMDoc(Doc):
     model: Text
     calls: Int
     log: list[LLMCallDoc] | None = None
+    chosen_by: Text | None = Field(
+        None, description="how `--llm auto` chose this backend and model, in one line "
+                          "(absent: they were named)")
 
 
 class ArrangementDoc(Doc):

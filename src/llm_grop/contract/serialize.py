@@ -77,8 +77,9 @@ def arrangement_doc(a: Arrangement, *, llm_log: bool = True, physical: bool = Fa
     origins = {name: (source, words) for name, source, words in a.origins}
     if a.llm is not None:
         log = {"log": [_call(c) for c in a.llm.calls]} if llm_log else {}
+        chosen = {"chosen_by": a.llm.chosen_by} if a.llm.chosen_by is not None else {}
         llm["llm"] = LLMDoc(backend=a.llm.backend, model=a.llm.model, calls=len(a.llm.calls),
-                            **log)
+                            **chosen, **log)
     return ArrangementDoc(
         request=a.request,
         table=TableDoc(shape="circle" if a.table.is_round else "rectangle",
@@ -118,7 +119,8 @@ def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -
                           for r in doc.relations)
     except ValueError as exc:
         raise BadInput(f"{where}: relations: {exc}") from None
-    llm = LLMSummary(doc.llm.backend, doc.llm.model) if doc.llm is not None else None
+    llm = LLMSummary(doc.llm.backend, doc.llm.model, chosen_by=doc.llm.chosen_by) \
+        if doc.llm is not None else None
     origins = tuple((o.name, o.source, o.words or "") for o in doc.objects
                     if o.source is not None)
     return Arrangement(doc.request, table_of(doc, where), tuple(placements), relations, llm,

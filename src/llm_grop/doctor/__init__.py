@@ -22,7 +22,7 @@ from llm_grop.doctor.installed import (
     extra_requirements,
 )
 from llm_grop.doctor.probes import check_llama_build, check_mujoco_gl
-from llm_grop.doctor.server import check_server
+from llm_grop.doctor.server import check_auto, check_server
 
 __all__ = ["MARKS", "Check", "Status", "report_line", "run_checks", "checks", "healthy"]
 
@@ -42,6 +42,7 @@ def checks(base_url: str | None = None, model: str | None = None,
         *[(lambda extra=extra: check_extra(extra, extra_requirements(extra)))
           for extra in EXTRAS],
         lambda: check_server(base_url, model, api_key),
+        lambda: check_auto(base_url, model),
     ]
 
 

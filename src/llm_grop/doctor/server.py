@@ -1,17 +1,18 @@
-"""The check of a configured OpenAI-compatible server: it answers ``GET /models`` and
-lists the model. The only network access the doctor makes, and only to the server the
-user configured."""
+"""The check of a configured OpenAI-compatible server (it answers ``GET /models`` and
+lists the model), and of what ``--llm auto`` would use. The only network access the
+doctor makes: to the server the user configured, and ``auto``'s bounded probe of
+127.0.0.1's usual ports."""
 
 from __future__ import annotations
 
 import json
 import shlex
-import time
 
 import httpx
 
 from llm_grop.doctor.check import Check, Status, one_line
-from llm_grop.settings import DEFAULTS
+from llm_grop.errors import LLMUnavailable
+from llm_grop.llm.auto import bounded_get, choose
 
 #: How long the server has to answer, in seconds.
 SERVER_TIMEOUT_S = 5.0
@@ -20,9 +21,6 @@ SERVER_TIMEOUT_S = 5.0
 _MAX_LISTED = 8
 #: Most characters of a name or reason from the server shown on the report's line.
 _MAX_SHOWN = 120
-#: The largest answer to ``GET /models`` read, in bytes.
-MAX_ANSWER_BYTES = DEFAULTS.max_answer_bytes
-
 _NAME = "openai server"
 
 
@@ -43,7 +41,7 @@ def check_server(base_url: str | None, model: str | None, api_key: str | None,
                      "which no HTTP header can carry", "export OPENAI_API_KEY=<the key, "
                      "as the server issued it>")
     try:
-        status, body = _get(f"{base_url.rstrip('/')}/models", key, timeout_s)
+        status, body = bounded_get(f"{base_url.rstrip('/')}/models", key, timeout_s)
     except (httpx.HTTPError, httpx.InvalidURL, TimeoutError, ValueError) as exc:
         reason = one_line(str(exc))[:_MAX_SHOWN] or type(exc).__name__
         return Check(_NAME, Status.FAIL, f"{root}: unreachable ({reason})",
@@ -71,22 +69,6 @@ def check_server(base_url: str | None, model: str | None, api_key: str | None,
                  f"({len(listed)} model{'s' if len(listed) != 1 else ''})")
 
 
-def _get(url: str, key: str, timeout_s: float) -> tuple[int, bytes]:
-    """The status and body of ``GET url``, within ``timeout_s`` seconds in all (a server
-    that trickles its answer is cut off) and :data:`MAX_ANSWER_BYTES` of body."""
-    deadline = time.monotonic() + timeout_s
-    with httpx.stream("GET", url, timeout=timeout_s,
-                      headers={"authorization": f"Bearer {key}"}) as response:
-        body = bytearray()
-        for chunk in response.iter_bytes():
-            body += chunk
-            if len(body) > MAX_ANSWER_BYTES:
-                raise ValueError(f"its answer is over {MAX_ANSWER_BYTES} bytes")
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"no whole answer within {timeout_s:g} s")
-        return response.status_code, bytes(body)
-
-
 def _without_password(url: str) -> str:
     """``url`` as the report may show it: a password in it is replaced by ``***``."""
     try:
@@ -95,3 +77,22 @@ def _without_password(url: str) -> str:
         return url
     return str(parsed.copy_with(username=parsed.username, password="***")) \
         if parsed.password else url
+
+
+def check_auto(base_url: str | None, model: str | None) -> Check:
+    """What ``--llm auto`` would use here: a warning when it is the small embedded model,
+    a failure when nothing is found."""
+    name = "llm auto"
+    try:
+        choice = choose(model, base_url)
+    except LLMUnavailable as exc:
+        return Check(name, Status.FAIL, one_line(str(exc))[:400],
+                     "ollama serve (or llama-server, or vLLM), or pass --base-url URL")
+    used = f"{choice.backend}" + (f" {choice.model}" if choice.model else "") + \
+        (f" at {choice.base_url}" if choice.base_url else "")
+    if choice.weak:
+        return Check(name, Status.WARN, "would use the embedded SmolLM2-135M: no local "
+                     "server answered (a small model for offline smoke runs)",
+                     "start Ollama, llama.cpp's llama-server or vLLM on 127.0.0.1, or pass "
+                     "--base-url URL")
+    return Check(name, Status.OK, f"would use {used} ({choice.why})")

@@ -142,6 +142,8 @@ class CallLog:
     #: the records' ``latency_s``, which a replay copies from the recording, this is the
     #: time this process really waited.
     wall_s: float = 0.0
+    #: How ``--llm auto`` chose this backend, in one line (``None``: it was named).
+    chosen_by: str | None = None
 
     @property
     def backend(self) -> str:

@@ -212,8 +212,9 @@ class RunSettings(BaseModel):
         group="execution", ge=1)
     # The LLM
     llm: str = setting(
-        "embedded", "LLM backend: embedded, openai, replay, or a plugin's (see `llm-grop "
-                    "plugins`).", group="llm", min_length=1,
+        "auto", "LLM backend: auto (a server named by --base-url or $OPENAI_BASE_URL, else "
+                "one answering on 127.0.0.1's usual ports, else embedded), embedded, openai, "
+                "replay, or a plugin's (see `llm-grop plugins`).", group="llm", min_length=1,
         door=Door(sweep="llm.backend"))
     model: str | None = setting(
         None, "Model name (openai) or GGUF path (embedded).", group="backend",

@@ -43,3 +43,5 @@ class LLMSummary:
     backend: str
     model: str
     calls: tuple[CallRecord, ...] = ()
+    #: How ``--llm auto`` chose the model, in one line (``None``: it was named).
+    chosen_by: str | None = None
