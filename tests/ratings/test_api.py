@@ -126,6 +126,19 @@ def test_joining_needs_a_known_code(client: TestClient) -> None:
     refused(client.post("/api/session", json={"code": "x" * 101}), 422, "code")
 
 
+@pytest.mark.parametrize(("body", "words"), [
+    (b'{"code": "\xff"}', "body: not UTF-8 text"),
+    (b'{"code": ' + b"9" * 5000 + b"}", "a number of more than 4300 digits"),
+    (b'{"code": ' + b"[" * 5000 + b"]" * 5000 + b"}", "nested more than 8 deep"),
+    (b'{"code": ' + b"[" * 8 + b"]" * 8 + b"}", "nested more than 8 deep"),
+    (b"{code", "body: not JSON"),
+])
+def test_a_body_that_cannot_be_read_is_422(client: TestClient, body: bytes,
+                                           words: str) -> None:
+    refused(client.post("/api/session", content=body,
+                        headers={"content-type": "application/json"}), 422, words)
+
+
 def test_the_api_needs_a_live_session(client: TestClient, study) -> None:
     db, codes = study
     refused(client.get("/api/next"), 401, "not signed in")

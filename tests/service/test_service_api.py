@@ -162,7 +162,7 @@ def test_malformed_json_and_unknown_paths(server: Server) -> None:
     with server.client() as c:
         r = c.post("/v1/arrangements", content=b"{not json", headers={
             "content-type": "application/json"})
-        assert r.status_code == 422 and r.json()["code"] == "bad_input"
+        assert r.status_code == 422 and r.json()["code"] == "bad_json"
         r = c.get("/v1/runs/nope")
         assert r.status_code == 404 and r.json() == {
             "error": "no run job 'nope' on this server", "code": "not_found"}

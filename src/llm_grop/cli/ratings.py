@@ -8,13 +8,13 @@ writes the figures of merit from the human ratings.
 from __future__ import annotations
 
 import secrets
-import socket
 from pathlib import Path
 
 import click
 
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG, check_out_dir, check_outputs
+from llm_grop.cli.serve import read_timeouts
 from llm_grop.errors import BadInput
 
 DB = click.option("--db", "db", required=True, type=click.Path(dir_okay=False, path_type=Path),
@@ -98,20 +98,23 @@ def invite(db: Path, count: int) -> None:
               type=click.FloatRange(min=0.01, max=24 * 30),
               help="How long a rater's session lasts.")
 @click.option("--forwarded-allow-ips", "proxy_ips", envvar="FORWARDED_ALLOW_IPS",
-              show_envvar=True, default="127.0.0.1", show_default=True,
+              show_envvar=True, default="",
               help="Addresses of the HTTPS proxies whose X-Forwarded-For and "
-                   "X-Forwarded-Proto are trusted (comma-separated, or *). Behind a proxy "
-                   "on another host, list it: else cookies lack the Secure flag and every "
-                   "rater shares the proxy's address for the join limit.")
+                   "X-Forwarded-Proto are trusted (comma-separated, or *) [default: none, "
+                   "so no client can claim another address]. Behind a proxy, list it (also "
+                   "127.0.0.1 for one on this machine): else cookies lack the Secure flag "
+                   "and every rater shares the proxy's address for the join limit.")
+@read_timeouts
 def serve(db: Path, host: str, port: int, admin_token: str | None,
-          session_hours: float, proxy_ips: str) -> None:
+          session_hours: float, proxy_ips: str, header_timeout_s: float,
+          body_timeout_s: float) -> None:
     """Serve the rating website for the study in the database."""
     _extra("fastapi")
     _extra("uvicorn")
-    import uvicorn
-
+    _extra("httptools")
     from llm_grop.ratings.app import create_app
     from llm_grop.ratings.study import study_info
+    from llm_grop.web import listen, run, url_of
 
     if admin_token is not None and len(admin_token.strip()) < MIN_TOKEN_CHARS:
         raise BadInput(f"--admin-token: use at least {MIN_TOKEN_CHARS} characters")
@@ -119,21 +122,14 @@ def serve(db: Path, host: str, port: int, admin_token: str | None,
     token = secrets.token_urlsafe(24) if admin_token is None else admin_token.strip()
     info = study_info(db)
     app = create_app(db, admin_token=token, ttl_s=session_hours * 3600)
-    try:
-        sock = socket.create_server((host, port))
-    except OSError as exc:
-        raise BadInput(f"--host {host} --port {port}: cannot listen "
-                       f"({exc.strerror or exc})") from None
-    bound = sock.getsockname()
-    shown = f"[{bound[0]}]" if ":" in bound[0] else bound[0]
+    sock = listen(host, port)
     click.echo(f"Serving study '{info.name}' ({info.items} pictures, {info.raters} raters) at "
-               f"http://{shown}:{bound[1]}/  (Ctrl-C stops)", err=True)
+               f"{url_of(sock)}  (Ctrl-C stops)", err=True)
     if generated:
         click.echo(f"Admin token: {token} (give --admin-token or set LLM_GROP_ADMIN_TOKEN "
                    "to choose one)", err=True)
-    config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=True,
-                            forwarded_allow_ips=proxy_ips)
-    uvicorn.Server(config).run(sockets=[sock])
+    run(app, sock, header_timeout_s=header_timeout_s, body_timeout_s=body_timeout_s,
+        forwarded_allow_ips=proxy_ips.strip() or None)
 
 
 @ratings.command(epilog=EPILOG)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -13,7 +14,23 @@ import click
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG, check_out_dir
 from llm_grop.cli.settings import LLM_FIELDS, flags, from_flags
-from llm_grop.errors import BadInput
+from llm_grop.errors import INTERNAL_ERROR_EXIT, BadInput
+
+
+def read_timeouts(command: Any) -> Any:
+    """``--header-timeout`` and ``--body-timeout`` on ``command``: both web servers'
+    (``serve``, ``ratings serve``) seconds a client has to send a request."""
+    command = click.option(
+        "--body-timeout", "body_timeout_s", default=30.0, show_default=True,
+        type=click.FloatRange(0.1, 3600),
+        help="Seconds a client has to send a request's body once its headers are in; then "
+             "408 and the connection is closed.")(command)
+    return click.option(
+        "--header-timeout", "header_timeout_s", default=10.0, show_default=True,
+        type=click.FloatRange(0.1, 3600),
+        help="Seconds a client has to send a request's line and headers (from connecting, "
+             "or from the request's first byte); then 408 and the connection is "
+             "closed.")(command)
 
 
 def _default_db() -> Path:
@@ -52,12 +69,13 @@ def _default_db() -> Path:
               type=click.FloatRange(0, min_open=True),
               help="Days an ended job's result, pictures and video are kept for its "
                    "permalink; older ones are deleted hourly.")
+@read_timeouts
 @click.option("--openapi", is_flag=True,
               help="Print the OpenAPI document (docs/schema/openapi.json) and exit.")
 def serve(host: str, port: int, backends: tuple[str, ...], replay: Path | None,
           workers: int, llm_threads: int | None, db: Path | None, token: str | None,
           run_time_s: float, queue: int, runs_per_client: int, keep_days: float,
-          openapi: bool,
+          header_timeout_s: float, body_timeout_s: float, openapi: bool,
           **flags: Any) -> None:
     """Serve the JSON API (/v1/) and the playground page (/) over HTTP.
 
@@ -65,7 +83,8 @@ def serve(host: str, port: int, backends: tuple[str, ...], replay: Path | None,
     server; clients choose among --llm by name (GET /v1/info lists them).
     """
     try:
-        import uvicorn
+        import httptools  # noqa: F401 - the HTTP parser the server's deadlines sit on
+        import uvicorn  # noqa: F401
 
         from llm_grop.service.app import create_app
     except ImportError as exc:
@@ -103,10 +122,20 @@ def serve(host: str, port: int, backends: tuple[str, ...], replay: Path | None,
     if openapi:
         click.echo(json.dumps(create_app(config, workers=False).openapi(), indent=2))
         return
+    from llm_grop.web import listen, run, url_of
+
+    sock = listen(host, port)
     app = create_app(config)
-    click.echo(f"llm-grop serve: http://{host}:{port}/ (jobs in {db}; backends "
+    click.echo(f"llm-grop serve: {url_of(sock)} (jobs in {db}; backends "
                f"{', '.join(names)}; {workers} workers)", err=True)
     # No proxy headers: a client on this machine could otherwise claim any address and
     # escape its per-client limits.
-    uvicorn.run(app, host=host, port=port, log_level="warning", timeout_graceful_shutdown=5,
-                proxy_headers=False)
+    try:
+        started = run(app, sock, header_timeout_s=header_timeout_s,
+                      body_timeout_s=body_timeout_s, graceful_s=5)
+    except KeyboardInterrupt:
+        return  # SIGINT or SIGTERM: shut down gracefully, which is no error for a server
+    if not started:
+        click.echo("llm-grop serve: the server did not start; the log above says why",
+                   err=True)
+        sys.exit(INTERNAL_ERROR_EXIT)

@@ -39,7 +39,15 @@ from llm_grop.ratings.store import (
     export_csv,
     image_url,
 )
-from llm_grop.web import GONE, TOO_LARGE, read_body, replaying, same_origin
+from llm_grop.web import (
+    GONE,
+    TOO_LARGE,
+    is_json,
+    json_problem,
+    read_body,
+    replaying,
+    same_origin,
+)
 
 COOKIE = "llm_grop_session"
 CSRF_HEADER = "X-CSRF-Token"
@@ -49,6 +57,8 @@ JOINS_PER_MINUTE = 10
 MAX_ADDRESSES = 10_000
 #: The largest request body accepted, bytes: a rating or a join is a few dozen.
 MAX_BODY_BYTES = 16 * 1024
+#: How deep a JSON body's arrays and objects may nest: a rating or a join is one object.
+MAX_BODY_DEPTH = 8
 #: Headers on every answer: no framing, no sniffing, no referrer, nothing from elsewhere.
 SECURITY_HEADERS = {
     "Content-Security-Policy": "default-src 'self'; img-src 'self'; script-src 'self'; "
@@ -63,8 +73,10 @@ SECURITY_HEADERS = {
 
 class Hardening:
     """ASGI middleware: :data:`SECURITY_HEADERS` on every answer, ``no-store`` on pages and
-    the API (whose answers are a rater's own), and 413 for a body larger than
-    :data:`MAX_BODY_BYTES`, declared or as read (a chunked body is read no further)."""
+    the API (whose answers are a rater's own), 413 for a body larger than
+    :data:`MAX_BODY_BYTES`, declared or as read (a chunked body is read no further), and
+    422 for a JSON body that cannot be read (not UTF-8, not JSON, nested deeper than
+    :data:`MAX_BODY_DEPTH`)."""
 
     def __init__(self, app: ASGIApp) -> None:
         self.app = app
@@ -84,16 +96,26 @@ class Hardening:
                     headers["Cache-Control"] = "no-store"
             await send(message)
 
-        body = await read_body(receive, MAX_BODY_BYTES,
-                               dict(scope["headers"]).get(b"content-length"))
+        headers = dict(scope["headers"])
+        body = await read_body(receive, MAX_BODY_BYTES, headers.get(b"content-length"))
         if body is GONE:
             return
         if body is TOO_LARGE:
+            # The rest of the body may still be on its way: this connection is done.
             too_big = JSONResponse({"error": f"request body larger than {MAX_BODY_BYTES} "
-                                             "bytes"}, status_code=413)
+                                             "bytes"}, status_code=413,
+                                   headers={"Connection": "close"})
             await too_big(scope, receive, with_headers)
             return
         assert isinstance(body, bytes)
+        # Older FastAPI reads a body without a Content-Type as JSON too.
+        kind = headers.get(b"content-type")
+        problem = json_problem(body, MAX_BODY_DEPTH) if body and scope["path"].startswith(
+            "/api/") and (kind is None or is_json(kind)) else None
+        if problem is not None:
+            await JSONResponse({"error": problem}, status_code=422)(scope, receive,
+                                                                     with_headers)
+            return
         await self.app(scope, replaying(body, receive), with_headers)
 
 

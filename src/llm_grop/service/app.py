@@ -104,7 +104,8 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
     app = FastAPI(title="llm-grop service", version="1", lifespan=lifespan,
                   docs_url=None, redoc_url=None, openapi_url="/v1/openapi.json",
                   description=DESCRIPTION)
-    app.add_middleware(Guard, token=config.token, max_body=config.limits.body_bytes)
+    app.add_middleware(Guard, token=config.token, max_body=config.limits.body_bytes,
+                       max_depth=config.limits.body_depth)
 
     @app.exception_handler(Refused)
     async def refused(request: Request, exc: Refused) -> Response:
@@ -154,7 +155,7 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
         limits = config.limits
         return Info(version=_version(), backends=[b.name for b in config.backends],
                     methods=available_methods(), simulators=available_simulators(),
-                    limits={"body_bytes": limits.body_bytes,
+                    limits={"body_bytes": limits.body_bytes, "body_depth": limits.body_depth,
                             "request_chars": limits.request_chars,
                             "objects": limits.objects, "run_time_s": limits.run_time_s,
                             "queue": limits.queue,

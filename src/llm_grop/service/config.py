@@ -20,6 +20,8 @@ class Limits:
     """What one client may ask of the server.
 
     ``body_bytes``: the largest request body (bytes actually read, chunked or not);
+    ``body_depth``: how deep a JSON body's arrays and objects may nest (the body itself is
+    level 1; far beyond any scene or arrangement, far below where pydantic breaks);
     ``request_chars``: the longest request text; ``objects``: most objects one request may
     set; ``run_time_s``: seconds a job may run before it is failed; ``queue``: most jobs
     waiting at once (more get 429); ``jobs_per_client``: most runs one client address may
@@ -29,6 +31,7 @@ class Limits:
     """
 
     body_bytes: int = 256 * 1024
+    body_depth: int = 64
     request_chars: int = 500
     objects: int = MAX_OBJECTS
     run_time_s: float = 600.0

@@ -1,6 +1,6 @@
 """The service's HTTP guard rails: refusals as one-line JSON, the bearer token, the body
-limit on the bytes actually read, security headers, and the lock that keeps one server
-per database."""
+limit on the bytes actually read and on how deep its JSON nests, security headers, and the
+lock that keeps one server per database."""
 
 from __future__ import annotations
 
@@ -14,16 +14,16 @@ from starlette.requests import cookie_parser
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from llm_grop import locking
-from llm_grop.web import GONE, TOO_LARGE, read_body, replaying
+from llm_grop.service.config import is_loopback
+from llm_grop.web import GONE, TOO_LARGE, is_json, json_problem, read_body, replaying
 
 #: The cookie a browser keeps the server's token in, after opening ``/?token=...`` once.
 TOKEN_COOKIE = "llm_grop_token"
-CODES = {400: "bad_host", 401: "unauthorized", 403: "forbidden", 404: "not_found",
+#: Each status's code; a refusal may name a more precise one (``bad_host``, ``bad_json``).
+CODES = {400: "bad_input", 401: "unauthorized", 403: "forbidden", 404: "not_found",
          405: "method_not_allowed", 409: "infeasible", 413: "too_large",
          415: "not_json", 416: "bad_range", 422: "bad_input", 429: "overloaded",
          500: "internal", 503: "llm_unavailable", 504: "timeout"}
-#: The names a browser gives a server bound to loopback.
-LOOPBACK_HOSTS = frozenset({"127.0.0.1", "localhost", "[::1]", "::1"})
 SECURITY_HEADERS = {
     "Content-Security-Policy": "default-src 'self'; img-src 'self'; media-src 'self'; "
                                "script-src 'self'; style-src 'self'; frame-ancestors 'none'; "
@@ -44,20 +44,25 @@ class Refused(Exception):
         self.status, self.message, self.headers = status, message, headers or {}
 
 
-def error_response(status: int, message: str,
-                   headers: dict[str, str] | None = None) -> JSONResponse:
-    """``{"error": message, "code": ...}`` with ``status``."""
-    return JSONResponse({"error": message, "code": CODES.get(status, "bad_input")},
+def error_response(status: int, message: str, headers: dict[str, str] | None = None,
+                   code: str | None = None) -> JSONResponse:
+    """``{"error": message, "code": ...}`` with ``status``; the code is the status's
+    unless given."""
+    return JSONResponse({"error": message, "code": code or CODES.get(status, "bad_input")},
                         status_code=status, headers=headers)
 
 
 class Guard:
     """ASGI middleware in front of everything: the bearer token (or, for a browser, the
     token cookie on reads and on the playground's forms), the body limit on the bytes
-    actually read (chunked or not), and security headers on every answer."""
+    actually read (chunked or not), JSON bodies the app can read (UTF-8, JSON, nested at
+    most ``max_depth`` deep: 422 ``bad_json`` otherwise), and security headers on every
+    answer."""
 
-    def __init__(self, app: ASGIApp, *, token: str | None, max_body: int) -> None:
-        self.app, self.token, self.max_body = app, token, max_body
+    def __init__(self, app: ASGIApp, *, token: str | None, max_body: int,
+                 max_depth: int) -> None:
+        self.app, self.token = app, token
+        self.max_body, self.max_depth = max_body, max_depth
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -72,11 +77,13 @@ class Guard:
             await send(message)
 
         headers = dict(scope["headers"])
-        if self.token is None and _host(headers) not in LOOPBACK_HOSTS:
+        if self.token is None and not is_loopback(_host(headers)):
             # Without a token only this machine may call: a page elsewhere that renamed
-            # itself to 127.0.0.1 (DNS rebinding) still sends its own name as Host.
-            await error_response(400, "host: this server answers only to 127.0.0.1, "
-                                      "localhost or [::1]; serve other hosts with --token"
+            # itself to 127.0.0.1 (DNS rebinding) still sends its own name as Host. An
+            # address in Host is no such name, and a loopback one is this machine.
+            await error_response(400, "host: this server answers only to 127.0.0.1 (or "
+                                      "another loopback address), localhost or [::1]; "
+                                      "serve other hosts with --token", code="bad_host"
                                  )(scope, receive, with_headers)
             return
         if self.token is not None and not self._allowed(scope, headers):
@@ -85,19 +92,27 @@ class Guard:
                 {"WWW-Authenticate": "Bearer"})
             await answer(scope, receive, with_headers)
             return
-        if scope["method"] == "POST" and scope["path"].startswith("/v1/") and not \
-                headers.get(b"content-type", b"").startswith(b"application/json"):
-            await error_response(415, "content-type: send the body as application/json"
-                                 )(scope, receive, with_headers)
+        api_post = scope["method"] == "POST" and scope["path"].startswith("/v1/")
+        content_type = headers.get(b"content-type")
+        if api_post and not is_json(content_type):
+            given = repr(content_type.decode("latin-1")[:60]) if content_type else "none"
+            await error_response(415, f"content-type: send the body as application/json, "
+                                      f"got {given}")(scope, receive, with_headers)
             return
         body = await read_body(receive, self.max_body, headers.get(b"content-length"))
         if body is GONE:
             return
         if body is TOO_LARGE:
+            # The rest of the body may still be on its way: this connection is done.
             await error_response(413, f"request body larger than this server's "
-                                      f"{self.max_body} bytes")(scope, receive, with_headers)
+                                      f"{self.max_body} bytes", {"Connection": "close"}
+                                 )(scope, receive, with_headers)
             return
         assert isinstance(body, bytes)
+        problem = json_problem(body, self.max_depth) if api_post and body else None
+        if problem is not None:
+            await error_response(422, problem, code="bad_json")(scope, receive, with_headers)
+            return
         await self.app(scope, replaying(body, receive), with_headers)
 
     def _allowed(self, scope: Scope, headers: dict[bytes, bytes]) -> bool:

@@ -151,7 +151,7 @@ class ErrorAnswer(BaseModel):
     error: str
     code: Literal["bad_input", "infeasible", "unauthorized", "forbidden", "not_found",
                   "too_large", "overloaded", "internal", "timeout", "method_not_allowed",
-                  "bad_host", "not_json", "bad_range", "llm_unavailable"]
+                  "bad_host", "not_json", "bad_range", "llm_unavailable", "bad_json"]
 
 
 class ReadObject(BaseModel):

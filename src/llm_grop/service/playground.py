@@ -169,8 +169,11 @@ def _body(action: str, fields: dict[str, str]) -> tuple[str, ArrangeBody | PlanB
                               "preferences": prefs, "seed": int(number("seed", fields["seed"])),
                               "llm": fields["llm"] or None}
     if action == "arrange":
-        diners = int(number("diners", fields["diners"]))
-        return "arrange", ArrangeBody(**common, diners=diners if diners > 1 else None)
+        # One diner is the form's default, "as the request says"; any other count goes to
+        # the API's body, which refuses 0, -1 or 2.5 in its own words.
+        diners = number("diners", fields["diners"])
+        count = int(diners) if diners.is_integer() else diners
+        return "arrange", ArrangeBody(**common, diners=None if count == 1 else count)
     if action == "plan":
         return "plan", PlanBody(**common)
     if action == "run":
