@@ -3,12 +3,18 @@
 
 from __future__ import annotations
 
+import json
+import os
 import random
+import re
 import signal
 import subprocess
 import sys
 import time
+import uuid
 from pathlib import Path
+
+import pytest
 
 RECORDING = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "embedded_calls.jsonl"
 #: Moments tried (seconds after start) and the signal sent at each; seeded, so repeatable.
@@ -51,3 +57,89 @@ def test_an_interrupt_inside_an_extensions_start_counts_as_an_interrupt() -> Non
         assert interrupted(exc)
     assert not interrupted(ImportError("No module named 'ray'"))
     assert interrupted(KeyboardInterrupt())
+
+
+# -- SIGTERM under every executor: 143, one line, no native stack dump, rows kept ----------
+
+#: A line an interrupted bench prints: the command's own, or the entry point's before it.
+INTERRUPTED_LINE = re.compile(r"(interrupted: \d+ finished trial\(s\) are saved in \S+"
+                              r"trials\.jsonl; rerun the same command to resume"
+                              r"|llm-grop: interrupted)")
+#: The executors tried, and their flags (one local worker runs trials in the driver itself).
+EXECUTORS = {"local-1": ["--workers", "1"], "local-2": ["--workers", "2"],
+             "ray": ["--executor", "ray", "--workers", "2"]}
+
+
+def _tagged(tag: str) -> list[str]:
+    """The command lines of the processes whose environment holds ``tag``: the bench and
+    everything it started, Ray's processes included."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                if tag.encode() in Path(f"/proc/{entry}/environ").read_bytes():
+                    cmd = Path(f"/proc/{entry}/cmdline").read_bytes().replace(b"\0", b" ")
+                    found.append(f"{entry} {cmd.decode(errors='replace').strip()}")
+            except OSError:  # gone, or a kernel thread
+                pass
+    return found
+
+
+def _rows(out: Path) -> list[tuple[int, int, str]]:
+    path = out / "trials.jsonl"
+    if not path.exists():
+        return []
+    return [(r["task"], r["trial"], r["method"])
+            for r in map(json.loads, path.read_text().splitlines())]
+
+
+def _wait(until, proc: subprocess.Popen, what: str) -> None:
+    deadline = time.monotonic() + 300
+    while not until():
+        assert proc.poll() is None, f"the bench ended before {what}"
+        assert time.monotonic() < deadline, f"no {what} within 300 s"
+        time.sleep(0.02)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("executor, moment", [
+    ("local-1", "mid-bench"), ("local-2", "mid-bench"), ("ray", "start-up"),
+    ("ray", "mid-bench")])
+def test_sigterm_is_143_and_one_line_under_every_executor(executor: str, moment: str,
+                                                          tmp_path: Path) -> None:
+    if executor == "ray":
+        pytest.importorskip("ray")
+    out = tmp_path / "bench"
+    tag = f"llm-grop-test-{uuid.uuid4().hex}"
+    # Ray's cluster on loopback only, never on this machine's network address.
+    env = dict(os.environ, LLM_GROP_TEST_TAG=tag, RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER="0")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "llm_grop", "bench", "--tasks", "1,2", "--trials", "3",
+         "--llm", "replay", "--replay", str(RECORDING), "--out", str(out), "--no-images",
+         "-q", *EXECUTORS[executor]], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    try:
+        if moment == "start-up":
+            # Ray's first process is up: ray.init is still starting the cluster.
+            _wait(lambda: any("gcs_server" in p for p in _tagged(tag)), proc, "Ray's GCS")
+        else:
+            _wait(lambda: _rows(out), proc, "a finished trial")
+        before = _rows(out)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=180)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    text = err.decode(errors="replace")
+    lines = [line for line in text.splitlines() if line.strip()]
+    assert proc.returncode == 143, (proc.returncode, text)
+    assert len(lines) == 1 and INTERRUPTED_LINE.fullmatch(lines[0]), text
+    assert "SIGTERM received" not in text and "PC: @" not in text
+    after = _rows(out)
+    assert after[:len(before)] == before and len(set(after)) == len(after)
+    # Nothing the bench started outlives it (the watchdog of a Ray cluster looks twice a
+    # second).
+    deadline = time.monotonic() + 30
+    while _tagged(tag) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not _tagged(tag)

@@ -2,8 +2,9 @@
 and no traceback for every interrupt, whenever it comes.
 
 It imports nothing heavy itself, so a Ctrl-C while the command line is still loading is
-answered like any other. SIGTERM is taken as an interrupt (exit status 143; 130 for
-Ctrl-C); once the command has ended, a late Ctrl-C or SIGTERM changes nothing.
+answered like any other, once it has loaded (a second one at once). SIGTERM is taken as an
+interrupt (exit status 143; 130 for Ctrl-C); once the command has ended, a late Ctrl-C or
+SIGTERM changes nothing.
 """
 
 from __future__ import annotations
@@ -26,8 +27,10 @@ TERMINATED = 143
 def main() -> int:
     """Run the command line; its exit status."""
     received: list[int] = []
+    loading, deferred = True, False
 
     def interrupt(signum: int, frame: FrameType | None) -> None:
+        nonlocal deferred
         if _in_cleanup(frame):
             # Raised here, in a finaliser or a weak reference's callback, the interrupt
             # would be printed as "Exception ignored" and lost; it is sent again, to land
@@ -36,6 +39,12 @@ def main() -> int:
             return
         if signum == signal.SIGTERM:
             received.append(signum)
+        if loading and not deferred:
+            # Raised inside an extension module's start (numpy's, under shapely's), the
+            # interrupt is printed there as a traceback and comes out as an ImportError
+            # of no cause: the first is answered once the command line has loaded.
+            deferred = True
+            return
         raise KeyboardInterrupt  # SIGTERM stops the command as Ctrl-C does, rows saved
 
     signal.signal(signal.SIGINT, interrupt)
@@ -43,6 +52,9 @@ def main() -> int:
     try:
         from llm_grop.cli import main as cli_main
 
+        loading = False
+        if deferred:
+            raise KeyboardInterrupt
         code = cli_main()
     except (KeyboardInterrupt, ImportError) as exc:  # before the command line could take it
         if not interrupted(exc):

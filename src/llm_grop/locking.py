@@ -24,16 +24,34 @@ def hold(lock: Path, param: str, value: object, holder: str) -> int:
     given ``value`` and the holder's process id if another process (``holder``: what it
     is, in words) has it."""
     fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    _take(fd, fcntl.LOCK_EX, param, value, holder)
+    os.ftruncate(fd, 0)
+    os.write(fd, str(os.getpid()).encode())
+    return fd
+
+
+def check(lock: Path, param: str, value: object, holder: str) -> None:
+    """:class:`BadInput` as from :func:`hold` if another process holds the lock on the file
+    ``lock`` now; nothing is made or kept (a missing or unreadable file has no holder).
+    Cheap, so a writer may ask before any other work and :func:`hold` once it writes."""
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fd = os.open(lock, os.O_RDONLY)
+    except OSError:
+        return
+    _take(fd, fcntl.LOCK_SH, param, value, holder)
+    os.close(fd)
+
+
+def _take(fd: int, how: int, param: str, value: object, holder: str) -> None:
+    """Lock the open file ``fd`` ``how`` (``LOCK_EX`` or ``LOCK_SH``) without waiting;
+    if another process holds it, close ``fd`` and raise :func:`hold`'s :class:`BadInput`."""
+    try:
+        fcntl.flock(fd, how | fcntl.LOCK_NB)
     except BlockingIOError:
         pid = os.read(fd, 32).decode(errors="replace").strip() or "?"
         os.close(fd)
         raise BadInput(f"in use by {holder} (pid {pid}); wait for it to end or stop it",
                        param=param, value=value) from None
-    os.ftruncate(fd, 0)
-    os.write(fd, str(os.getpid()).encode())
-    return fd
 
 
 def release(fd: int) -> None:

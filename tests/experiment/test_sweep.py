@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -106,6 +109,39 @@ def test_a_directory_of_something_else_is_refused(tmp_path: Path, capsys) -> Non
     (tmp_path / "out" / "notes.txt").write_text("mine")
     assert main(["sweep", str(tmp_path / "sweep.yaml"), "--out", str(tmp_path / "out")]) == 2
     assert "not empty and holds no sweep.json" in _one_line_error(capsys)
+
+
+def test_two_sweeps_at_once_on_one_directory(tmp_path: Path, capsys) -> None:
+    first_file, second_file = tmp_path / "first.yaml", tmp_path / "second.yaml"
+    first_file.write_text(SWEEP.replace("trials: 2", "trials: 4"))  # 32 trials, seconds
+    second_file.write_text(SWEEP.replace("chairs: [0, 2]", "chairs: [1]"))
+    out = tmp_path / "out"
+    first = subprocess.Popen([sys.executable, "-m", "llm_grop", "sweep", str(first_file),
+                              "--out", str(out), "-q", "--workers", "1"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while not (out / "sweep.json").exists():
+        assert first.poll() is None and time.monotonic() < deadline
+        time.sleep(0.02)
+    # The first holds its directory from before its marker is written to after its last
+    # report: a second sweep, and a bench, on it are refused at once, naming it.
+    in_use = (f"llm-grop: error: --out {out}: in use by another llm-grop run on this "
+              f"directory (pid {first.pid}); wait for it to end or stop it")
+    assert main(["sweep", str(second_file), "--out", str(out), "-q"]) == 2
+    assert _one_line_error(capsys) == in_use
+    assert main(["bench", "--tasks", "1", "--trials", "1", "--llm", "replay", "--replay",
+                 str(RECORDING), "--no-images", "-q", "--out", str(out)]) == 2
+    assert _one_line_error(capsys) == in_use
+    assert first.poll() is None
+    _, err = first.communicate(timeout=300)
+    assert first.returncode == 0, err
+    names = [c.name for c in load_sweep(first_file).cells]
+    assert [c["name"] for c in json.loads((out / "sweep.json").read_text())["cells"]] == names
+    assert [c["name"] for c in json.loads((out / "summary.json").read_text())["cells"]] == names
+    assert sorted(p.name for p in out.iterdir() if p.is_dir()) == sorted(names)
+    # Once it has ended, the directory is free.
+    assert main(["sweep", str(second_file), "--out", str(out), "-q"]) == 0
+    assert (out / "weight=40.5,chairs=1" / "summary.md").exists()
 
 
 @pytest.mark.parametrize(("text", "needle"), [

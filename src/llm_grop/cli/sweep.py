@@ -17,7 +17,9 @@ from llm_grop.errors import BadInput
 from llm_grop.settings import in_words
 
 if TYPE_CHECKING:
-    from llm_grop.experiment.sweep import Values
+    from llm_grop.experiment.executors import Executor
+    from llm_grop.experiment.runner import Cell
+    from llm_grop.experiment.sweep import Sweep, Values
 
 
 
@@ -84,17 +86,15 @@ def experiment_params(values: Values) -> dict[str, Any]:
 def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
     """Run a grid of bench experiments (tasks, methods, chairs, tables, simulators, LLMs,
     weights, trials) from a sweep file, each cell in a directory of its own."""
-    from rich.console import Console
-
-    from llm_grop.experiment.executors import describe
-    from llm_grop.experiment.runner import Cell, run_cells
-    from llm_grop.experiment.summary import rich_table
+    from llm_grop import locking
+    from llm_grop.experiment.runner import HOLDER, LOCK, Cell
     from llm_grop.experiment.sweep import MARKER, load_sweep
-    from llm_grop.experiment.sweep_report import sweep_rows, write_sweep_reports
-    from llm_grop.files.jsonio import write_json
 
     check_out_dir("out", out_dir)
-    if out_dir.is_dir() and any(out_dir.iterdir()) and not (out_dir / MARKER).exists():
+    # A sweep or bench running in the directory refuses this one before any other work.
+    locking.check(out_dir / LOCK, "out", out_dir, HOLDER)
+    if out_dir.is_dir() and any(p.name != LOCK for p in out_dir.iterdir()) and not (
+            out_dir / MARKER).exists():
         raise BadInput(f"--out {out_dir}: not empty and holds no {MARKER}; choose an empty "
                        "or new directory")
     plan = load_sweep(sweep_file)
@@ -110,6 +110,28 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
                 from None
         cells.append(Cell(exp, out_dir / cell.name))
     out_dir.mkdir(parents=True, exist_ok=True)
+    # Held from before the marker is written to after the last report, so that two sweeps
+    # never share the directory, whichever started first.
+    held = locking.hold(out_dir / LOCK, "out", out_dir, HOLDER)
+    try:
+        _run(sweep_file, out_dir, plan, cells, executor, quiet, flags["max_failed"])
+    finally:
+        locking.release(held)
+
+
+def _run(sweep_file: Path, out_dir: Path, plan: Sweep, cells: list[Cell],
+         executor: Executor, quiet: bool, max_failed: int | None) -> None:
+    """Run the checked sweep ``plan`` into ``out_dir``, whose lock this process holds: its
+    marker, every cell's trials, then the reports."""
+    from rich.console import Console
+
+    from llm_grop.experiment.executors import describe
+    from llm_grop.experiment.runner import run_cells
+    from llm_grop.experiment.summary import rich_table
+    from llm_grop.experiment.sweep import MARKER
+    from llm_grop.experiment.sweep_report import sweep_rows, write_sweep_reports
+    from llm_grop.files.jsonio import write_json
+
     write_json(out_dir / MARKER, {"format": 1, "sweep": str(sweep_file), "axes": plan.axes,
                                   "cells": [{"name": c.name, "axes": dict(c.axes)}
                                             for c in plan.cells]})
@@ -118,7 +140,7 @@ def sweep(sweep_file: Path, out_dir: Path, quiet: bool, **flags: Any) -> None:
     with TrialProgress(console, quiet, out_dir,
                        label=lambda k: plan.cells[k].name) as progress:
         outcomes = run_cells(cells, executor, on_start=progress.start, on_row=progress.row,
-                             keep_rows=False, max_failed=flags["max_failed"])
+                             keep_rows=False, max_failed=max_failed)
     wall = time.perf_counter() - t0
     if any(o.interrupted for o in outcomes):
         saved = sum(o.ran + o.skipped for o in outcomes)

@@ -28,6 +28,13 @@ recording, catalogs, tasks) at the same paths.
   is not retried.
 * **The LLM cache** is a directory on each node (``--cache-dir``); nodes that share it over
   a network file system share answers too.
+* **Signals.** Ctrl-C and SIGTERM stop a Ray bench as they stop a local one (the driver's
+  handlers stay this process's): ``ray.init`` replaces the SIGTERM handler with one that
+  exits with status 15, so the handler it found is put back, and a SIGTERM Ray takes while
+  it starts is handed to it; Ray's native failure signal handler, which prints a stack
+  dump on SIGTERM and aborts 3 s later, is left out (``RAY_DISABLE_FAILURE_SIGNAL_HANDLER``,
+  set unless already set, before Ray is imported; the cluster this driver starts inherits
+  it).
 """
 
 from __future__ import annotations
@@ -35,9 +42,11 @@ from __future__ import annotations
 import logging
 import math
 import os
+import signal
 import socket
 import subprocess
 import sys
+import threading
 from collections import deque
 from collections.abc import Generator, Iterator, Sequence
 from typing import Any
@@ -76,6 +85,8 @@ class RayExecutor:
     spawns = True
 
     def __init__(self, options: ExecutorOptions) -> None:
+        # Read once, when Ray is first imported; a user's own setting is kept.
+        os.environ.setdefault("RAY_DISABLE_FAILURE_SIGNAL_HANDLER", "1")
         try:
             import ray
         except ImportError:
@@ -148,10 +159,7 @@ class RayExecutor:
                 try:
                     ray.shutdown()
                 finally:
-                    if self._watchdog is not None:
-                        self._watchdog.kill()
-                        self._watchdog.wait()
-                        self._watchdog = None
+                    self._stop_watchdog()
 
     def _connect(self) -> bool:
         """Join or start a cluster; ``True`` when this call started it (and must stop it)."""
@@ -168,22 +176,37 @@ class RayExecutor:
             if address is not None:
                 _check_reachable(address)
                 _check_joinable(address)
-                ray.init(address=address, **kwargs)
+                _init(ray, address=address, **kwargs)
             else:
                 workers = self.options.workers
                 cpus = None if workers is None else math.ceil(
                     workers * self.options.cpus_per_trial)
-                ray.init(num_cpus=cpus, **kwargs)
-                # Should this process be killed, nothing it started must outlive it.
+                # Should this process be killed, even while Ray starts, nothing it started
+                # must outlive it.
                 self._watchdog = subprocess.Popen(
                     [sys.executable, "-m", "llm_grop.experiment.ray_watchdog",
                      str(os.getpid())], start_new_session=True, stdin=subprocess.DEVNULL,
                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                try:
+                    _init(ray, num_cpus=cpus, **kwargs)
+                except Exception:
+                    # Ray said no and cleaned up. An interrupt instead leaves the watchdog
+                    # to take down what Ray had started when it was cut off, which Ray's
+                    # own shutdown cannot reach, once this process ends.
+                    self._stop_watchdog()
+                    raise
         except (ConnectionError, RuntimeError, ValueError) as exc:
             where = f"the Ray cluster at {address}" if address else "a local Ray cluster"
             raise BadInput(f"cannot reach {where}: {' '.join(str(exc).split())[:200]}",
                            param="executor", value="ray") from None
         return True
+
+    def _stop_watchdog(self) -> None:
+        """End the watchdog of the cluster this executor started, if it runs one."""
+        if self._watchdog is not None:
+            self._watchdog.kill()
+            self._watchdog.wait()
+            self._watchdog = None
 
     def _result(self, ref: Any, job: Job) -> Done:
         """The task's :class:`Done`. A failure is one line naming the trial: llm-grop's own
@@ -213,6 +236,34 @@ class RayExecutor:
             raise LLMGropError(f"{where}: the Ray worker running it failed: "
                                f"{_line(exc)}") from None
         return done
+
+
+def _init(ray: Any, **kwargs: Any) -> None:
+    """``ray.init(**kwargs)``, this process's SIGTERM handler kept.
+
+    In the main thread ``ray.init`` first installs a SIGTERM handler that exits with
+    status 15 (``sys.exit``), and leaves it there. The handler it found is put back
+    afterwards, and a SIGTERM that reached Ray's while it started is sent again, to it.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        ray.init(**kwargs)  # Ray leaves the signal handlers be outside the main thread
+        return
+    ours = signal.getsignal(signal.SIGTERM)
+    if ours is None:  # a handler set outside Python, which could not be put back
+        ray.init(**kwargs)
+        return
+    try:
+        try:
+            ray.init(**kwargs)
+        finally:
+            signal.signal(signal.SIGTERM, ours)
+    except SystemExit as exc:
+        if exc.code != signal.SIGTERM:
+            raise
+        # Again: the signal may have come just before the handler was put back.
+        signal.signal(signal.SIGTERM, ours)
+        signal.raise_signal(signal.SIGTERM)
+        raise  # the handler ignored it (SIG_IGN); Ray's start was cut off all the same
 
 
 def _line(exc: BaseException) -> str:

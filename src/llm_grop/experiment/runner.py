@@ -63,8 +63,11 @@ from llm_grop.simulation.registry import SIMULATORS
 
 log = logging.getLogger(__name__)
 
-#: The lock file one run holds in each results directory it writes.
+#: The lock file one run holds in each results directory it writes (a sweep also in its
+#: own directory, from start to its last report).
 LOCK = ".lock"
+#: Who holds a results directory's :data:`LOCK`, in a refused run's words.
+HOLDER = "another llm-grop run on this directory"
 IDENTITY = "experiment.json"
 
 
@@ -216,12 +219,13 @@ def run_cells(cells: Sequence[Cell], executor: Executor, *,
     # Checked before any directory is made: an entry that cannot reach workers fails now.
     registered = plugins.registered(used) if executor.spawns else {}
     for cell in cells:
+        # A directory in use (a sweep's own among them) is refused for that, naming who.
+        locking.check(cell.out / LOCK, "out", cell.out, HOLDER)
         prepare_dir(cell.out, cell.experiment)
     held: list[int] = []
     try:
         for cell in cells:
-            held.append(locking.hold(cell.out / LOCK, "out", cell.out,
-                                     "another llm-grop run on this directory"))
+            held.append(locking.hold(cell.out / LOCK, "out", cell.out, HOLDER))
         return _run_locked(cells, executor, registered, on_start, on_row, keep_rows,
                            max_failed)
     finally:
