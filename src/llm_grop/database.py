@@ -6,14 +6,18 @@ order in one transaction each; the file's ``PRAGMA user_version`` is the last on
 and ``PRAGMA application_id`` marks whose file it is. A file whose version is newer than
 this llm-grop knows, or that belongs to something else, is refused with one line.
 
+A server's threads share a :class:`Pool` of connections, which outlives any thread.
+
 This module imports nothing from the package but its errors, so every layer may use it.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import re
 import sqlite3
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import cache
@@ -75,14 +79,9 @@ def connect(kind: Kind, path: str | Path, *, create: bool = False, upto: int | N
     if not create and not path.is_file():
         raise BadInput(f"{flag} {path}: no such {kind.label}; {kind.make_hint}")
     try:
-        # A web request may open it in one worker thread and use it in another, one at a
-        # time (the rating site); it is never shared by two at once (the service's job
-        # store gives each thread a connection of its own).
-        conn = sqlite3.connect(path, isolation_level=None, timeout=BUSY_TIMEOUT_MS / 1000,
-                               check_same_thread=False)
+        conn = _open(path)
     except sqlite3.Error as exc:
         raise BadInput(f"{flag} {path}: cannot open ({exc})") from None
-    conn.row_factory = sqlite3.Row
     try:
         _prepare(conn, kind, path, upto, flag)
     except BaseException:
@@ -91,10 +90,28 @@ def connect(kind: Kind, path: str | Path, *, create: bool = False, upto: int | N
     return conn
 
 
+def _open(path: Path) -> sqlite3.Connection:
+    """A connection to ``path`` as :func:`connect` leaves it, without its checks."""
+    # A web request may open it in one worker thread and use it in another, one at a time
+    # (the rating site, the service's pool); it is never shared by two at once.
+    conn = sqlite3.connect(path, isolation_level=None, timeout=BUSY_TIMEOUT_MS / 1000,
+                           check_same_thread=False)
+    conn.row_factory = sqlite3.Row
+    return conn
+
+
+def _configure(conn: sqlite3.Connection) -> None:
+    conn.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+    # Every commit reaches the disk before it is acknowledged: a rating or an accepted job
+    # once confirmed survives a power cut.
+    conn.execute("PRAGMA synchronous = FULL")
+    conn.execute("PRAGMA foreign_keys = ON")
+
+
 def _prepare(conn: sqlite3.Connection, kind: Kind, path: Path, upto: int | None,
              flag: str) -> None:
     try:
-        conn.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
+        _configure(conn)
         app_id = conn.execute("PRAGMA application_id").fetchone()[0]
         version = conn.execute("PRAGMA user_version").fetchone()[0]
         tables = conn.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]
@@ -107,10 +124,6 @@ def _prepare(conn: sqlite3.Connection, kind: Kind, path: Path, upto: int | None,
         raise BadInput(f"{flag} {path}: written by a newer llm-grop (schema {version}, this "
                        f"one knows {len(steps)}); upgrade llm-grop")
     conn.execute("PRAGMA journal_mode = WAL")
-    # Every commit reaches the disk before it is acknowledged: a rating or an accepted job
-    # once confirmed survives a power cut.
-    conn.execute("PRAGMA synchronous = FULL")
-    conn.execute("PRAGMA foreign_keys = ON")
     for step in steps[version:upto]:
         try:
             conn.executescript(f"BEGIN IMMEDIATE;\n{step.sql}\n"
@@ -131,7 +144,89 @@ def transaction(conn: sqlite3.Connection) -> Iterator[sqlite3.Connection]:
     conn.execute("BEGIN IMMEDIATE")
     try:
         yield conn
+        conn.execute("COMMIT")
     except BaseException:
-        conn.execute("ROLLBACK")
+        # A COMMIT that failed (the disk is full) may leave the transaction open, holding
+        # the write lock for as long as the connection lives.
+        if conn.in_transaction:
+            with contextlib.suppress(sqlite3.Error):
+                conn.execute("ROLLBACK")
         raise
-    conn.execute("COMMIT")
+
+
+class Pool:
+    """Connections to the ``kind`` database at ``path``, each lent to one thread at a time
+    (:meth:`connection`) and tied to no thread's life: a thread pool that retires its
+    threads leaves no connection behind.
+
+    At most ``size`` connections are open at once (a caller waits while all are lent out):
+    the first is opened (checked and migrated, :func:`connect`) at once, the others when
+    they are first needed, and all are kept for the next callers, except one opened while
+    the file could not be written (SQLite opens it read-only, and it would stay so). When
+    a use raises :class:`sqlite3.Error`, its connection and the idle ones are closed, to
+    be opened afresh: the disk under them may have changed.
+    """
+
+    def __init__(self, kind: Kind, path: str | Path, *, size: int = 16, create: bool = False,
+                 flag: str = "--db") -> None:
+        self.path = Path(path)
+        self._slots = threading.BoundedSemaphore(size)
+        self._lock = threading.Lock()
+        self._closed = False
+        self._read_only: set[sqlite3.Connection] = set()
+        self._idle: list[sqlite3.Connection] = []
+        self._give_back(self._checked(connect(kind, self.path, create=create, flag=flag)))
+
+    @contextlib.contextmanager
+    def connection(self) -> Iterator[sqlite3.Connection]:
+        """A connection of this thread's own until the block ends."""
+        with self._slots:
+            with self._lock:
+                conn = self._idle.pop() if self._idle else None
+            if conn is None:
+                conn = self._checked(_open(self.path))
+                try:
+                    _configure(conn)
+                except BaseException:
+                    self._close(conn)
+                    raise
+            try:
+                yield conn
+            except sqlite3.Error:
+                self._close(conn)
+                self._drain()
+                raise
+            except BaseException:
+                self._give_back(conn)
+                raise
+            self._give_back(conn)
+
+    def _checked(self, conn: sqlite3.Connection) -> sqlite3.Connection:
+        if not os.access(self.path, os.W_OK):
+            with self._lock:
+                self._read_only.add(conn)
+        return conn
+
+    def _give_back(self, conn: sqlite3.Connection) -> None:
+        with self._lock:
+            if not (self._closed or conn.in_transaction or conn in self._read_only):
+                self._idle.append(conn)
+                return
+        self._close(conn)
+
+    def _close(self, conn: sqlite3.Connection) -> None:
+        with self._lock:
+            self._read_only.discard(conn)
+        conn.close()
+
+    def close(self) -> None:
+        """Close the idle connections; those lent out are closed when they come back."""
+        with self._lock:
+            self._closed = True
+        self._drain()
+
+    def _drain(self) -> None:
+        with self._lock:
+            idle, self._idle = self._idle, []
+        for conn in idle:
+            self._close(conn)

@@ -120,9 +120,9 @@ def test_ended_jobs_are_pruned_after_the_keep_time_with_their_files(tmp_path: Pa
         assert job is not None
         store.event(job, "working")
         assert store.finish(job, {"run": job.id}, {"a.png": ("image/png", b"x")})
-    store.conn.execute("UPDATE jobs SET finished = ? WHERE id = ?",
-                       (time.time() - 40 * 86400, old))
-    store.conn.commit()
+    with store.connection() as conn:
+        conn.execute("UPDATE jobs SET finished = ? WHERE id = ?",
+                     (time.time() - 40 * 86400, old))
     # The supervisor's round prunes what ended more than keep_s ago, nothing else.
     pool = WorkerPool(ServiceConfig(db=db, backends=(), keep_s=30 * 86400))
     pool._store = store

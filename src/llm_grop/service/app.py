@@ -45,6 +45,7 @@ from llm_grop.service.models import (
 )
 from llm_grop.service.playground import add_playground
 from llm_grop.service.service import Service, StillRunning
+from llm_grop.service.storage_errors import answer_storage_errors
 from llm_grop.service.workers import WorkerPool, status_of
 
 log = logging.getLogger(__name__)
@@ -141,6 +142,7 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
     service = Service(config, store)
     app.state.service = service
+    answer_storage_errors(app, service, internal)
 
     def client(request: Request) -> str:
         return request.client.host if request.client is not None else "?"

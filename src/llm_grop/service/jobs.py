@@ -12,12 +12,12 @@ attempts, so every accepted job reaches a terminal state.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import secrets
 import sqlite3
-import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -36,6 +36,8 @@ MAX_ATTEMPTS = 3
 PRUNE_BATCH = 20
 #: Queue order: answers a client waits for go before runs.
 PRIORITY: dict[str, int] = {"arrange": 0, "plan": 0, "run": 1}
+#: Connections a store has open at most (its calls wait for one while all are in use).
+CONNECTIONS = 16
 
 
 class Overloaded(Exception):
@@ -83,34 +85,32 @@ def _job(row: sqlite3.Row) -> Job:
 
 
 class JobStore:
-    """The jobs in the database at ``path`` (made if missing). Its methods may be called
-    from any thread: each thread has a connection of its own, so a call that waits on
-    another's write (a worker's video) holds up no reader."""
+    """The jobs in the database at ``path`` (made if missing, checked and migrated at
+    once). Its methods may be called from any thread: each call borrows a connection of
+    its own from a pool of at most ``connections`` (:class:`llm_grop.database.Pool`), so a
+    call that waits on another's write (a worker's video) holds up no reader, and the
+    server's threads coming and going leave no connection open behind them."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, *, connections: int = CONNECTIONS) -> None:
         self.path = path
-        self._local = threading.local()
-        self._opened: list[sqlite3.Connection] = []
-        self._opening = threading.Lock()
-        self.conn  # noqa: B018 - opened (and migrated) now: a bad file is reported at once
+        self._pool = database.Pool(JOBS, path, size=connections, create=True)
 
-    @property
-    def conn(self) -> sqlite3.Connection:
-        """This thread's connection to the database, opened on its first use."""
-        conn: sqlite3.Connection | None = getattr(self._local, "conn", None)
-        if conn is None:
-            conn = database.connect(JOBS, self.path, create=True)
-            self._local.conn = conn
-            with self._opening:
-                self._opened.append(conn)
-        return conn
+    def connection(self) -> contextlib.AbstractContextManager[sqlite3.Connection]:
+        """A connection to the database, this thread's alone until the block ends."""
+        return self._pool.connection()
 
     def close(self) -> None:
-        """Close every thread's connection."""
-        with self._opening:
-            for conn in self._opened:
-                conn.close()
-            self._opened.clear()
+        """Close the store's connections (those in use as their calls end)."""
+        self._pool.close()
+
+    @contextlib.contextmanager
+    def _write(self) -> Iterator[sqlite3.Connection]:
+        with self._pool.connection() as conn, transaction(conn) as c:
+            yield c
+
+    def _rows(self, sql: str, args: tuple[Any, ...] = ()) -> list[sqlite3.Row]:
+        with self._pool.connection() as c:
+            return c.execute(sql, args).fetchall()
 
     # ---- clients ------------------------------------------------------------------------
 
@@ -119,7 +119,7 @@ class JobStore:
         """Accept a job and return its id; :class:`Overloaded` when ``queue`` jobs wait
         already, or (``per_client``) the client has that many of this kind unfinished."""
         job_id = secrets.token_urlsafe(9)
-        with transaction(self.conn) as c:
+        with self._write() as c:
             waiting = c.execute("SELECT count(*) FROM jobs WHERE state = 'queued'"
                                 ).fetchone()[0]
             if waiting >= queue:
@@ -139,13 +139,13 @@ class JobStore:
 
     def get(self, job_id: str) -> Job | None:
         """The job ``job_id``, or ``None``."""
-        row = self.conn.execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
-        return _job(row) if row is not None else None
+        rows = self._rows("SELECT * FROM jobs WHERE id = ?", (job_id,))
+        return _job(rows[0]) if rows else None
 
     def cancel(self, job_id: str) -> Job | None:
         """Cancel a job: a queued one at once, a running one when its worker is stopped
         (:meth:`to_cancel`); an ended one stays as it is."""
-        with transaction(self.conn) as c:
+        with self._write() as c:
             c.execute("UPDATE jobs SET state = 'cancelled', finished = ?, error = "
                       "'cancelled by the client' WHERE id = ? AND state = 'queued'",
                       (time.time(), job_id))
@@ -155,18 +155,18 @@ class JobStore:
 
     def file(self, job_id: str, name: str) -> tuple[str, bytes] | None:
         """A job's file: ``(media type, bytes)``, or ``None``."""
-        row = self.conn.execute("SELECT media_type, data FROM files WHERE job = ? AND "
-                                "name = ?", (job_id, name)).fetchone()
-        return (row[0], bytes(row[1])) if row is not None else None
+        rows = self._rows("SELECT media_type, data FROM files WHERE job = ? AND name = ?",
+                          (job_id, name))
+        return (rows[0][0], bytes(rows[0][1])) if rows else None
 
     def files(self, job_id: str) -> list[str]:
         """The names of a job's files."""
-        return [r[0] for r in self.conn.execute(
+        return [r[0] for r in self._rows(
             "SELECT name FROM files WHERE job = ? ORDER BY name", (job_id,))]
 
     def events(self, job_id: str, after: int = 0) -> list[tuple[int, float, str]]:
         """A job's progress events after number ``after``: ``(seq, time, message)``."""
-        return [(r[0], r[1], r[2]) for r in self.conn.execute(
+        return [(r[0], r[1], r[2]) for r in self._rows(
             "SELECT seq, at, message FROM events WHERE job = ? AND seq > ? ORDER BY seq",
             (job_id, after))]
 
@@ -177,7 +177,7 @@ class JobStore:
 
     def counts(self) -> dict[str, int]:
         """How many jobs are in each state."""
-        return {r[0]: r[1] for r in self.conn.execute(
+        return {r[0]: r[1] for r in self._rows(
             "SELECT state, count(*) FROM jobs GROUP BY state")}
 
     # ---- workers ------------------------------------------------------------------------
@@ -185,10 +185,11 @@ class JobStore:
     def claim(self, worker: int) -> Job | None:
         """The next queued job, now running under a fresh claim for process ``worker``."""
         # Idle workers look often: a read takes no lock, so only a likely claim writes.
-        if self.conn.execute("SELECT 1 FROM jobs WHERE state = 'queued' LIMIT 1"
-                             ).fetchone() is None:
+        if not self._rows("SELECT 1 FROM jobs WHERE state = 'queued' LIMIT 1"):
             return None
-        with transaction(self.conn) as c:
+        # One transaction, nothing after it: a claim that failed to commit (the disk is
+        # full) leaves the job queued, never running under a worker that does not know.
+        with self._write() as c:
             row = c.execute("SELECT id FROM jobs WHERE state = 'queued' ORDER BY priority, "
                             "rowid LIMIT 1").fetchone()
             if row is None:
@@ -196,25 +197,29 @@ class JobStore:
             c.execute("UPDATE jobs SET state = 'running', claim = ?, worker = ?, started = ?, "
                       "attempts = attempts + 1 WHERE id = ?",
                       (secrets.token_hex(8), worker, time.time(), row[0]))
-        job = self.get(row[0])
-        if job is not None and job.attempts > 1:
-            self.event(job, f"attempt {job.attempts} of {MAX_ATTEMPTS}, after the last one "
-                            "was interrupted")
+            job = _job(c.execute("SELECT * FROM jobs WHERE id = ?", (row[0],)).fetchone())
+            if job.attempts > 1:
+                self._event(c, job, f"attempt {job.attempts} of {MAX_ATTEMPTS}, after the "
+                                    "last one was interrupted")
         return job
 
     def event(self, job: Job, message: str) -> None:
         """Add a progress event to ``job`` (nothing if its claim is no longer held)."""
-        with transaction(self.conn) as c:
+        with self._write() as c:
             if self._held(c, job):
-                c.execute("INSERT INTO events (job, seq, at, message) SELECT ?, "
-                          "coalesce(max(seq), 0) + 1, ?, ? FROM events WHERE job = ?",
-                          (job.id, time.time(), message, job.id))
+                self._event(c, job, message)
+
+    @staticmethod
+    def _event(c: sqlite3.Connection, job: Job, message: str) -> None:
+        c.execute("INSERT INTO events (job, seq, at, message) SELECT ?, coalesce(max(seq), "
+                  "0) + 1, ?, ? FROM events WHERE job = ?",
+                  (job.id, time.time(), message, job.id))
 
     def finish(self, job: Job, result: Mapping[str, Any],
                files: Mapping[str, tuple[str, bytes]]) -> bool:
         """Record ``job`` done with ``result`` and ``files`` (name -> media type, bytes);
         ``False`` (nothing written) if its claim is no longer held."""
-        with transaction(self.conn) as c:
+        with self._write() as c:
             if not self._held(c, job):
                 return False
             c.executemany("INSERT OR REPLACE INTO files (job, name, media_type, data) VALUES "
@@ -226,7 +231,7 @@ class JobStore:
     def fail(self, job: Job, status: int, error: str) -> bool:
         """Record ``job`` failed with HTTP ``status`` and the one-line ``error``; ``False``
         if its claim is no longer held."""
-        with transaction(self.conn) as c:
+        with self._write() as c:
             if not self._held(c, job):
                 return False
             c.execute("UPDATE jobs SET state = 'failed', status = ?, error = ?, finished = ? "
@@ -242,21 +247,22 @@ class JobStore:
 
     def running(self) -> list[Job]:
         """Every running job."""
-        return [_job(r) for r in self.conn.execute(
+        return [_job(r) for r in self._rows(
             "SELECT * FROM jobs WHERE state = 'running' ORDER BY rowid")]
 
     def end(self, job: Job, state: Literal["failed", "cancelled"], status: int | None,
             error: str) -> None:
         """End a running job whose worker was stopped (over time, or cancelled)."""
-        with transaction(self.conn) as c:
+        with self._write() as c:
             c.execute("UPDATE jobs SET state = ?, status = ?, error = ?, finished = ? "
                       "WHERE id = ? AND claim = ? AND state = 'running'",
                       (state, status, error, time.time(), job.id, job.claim))
 
-    def orphaned(self, job: Job, why: str) -> None:
-        """A running job whose worker died (``why``): queued again, or failed after
-        :data:`MAX_ATTEMPTS` attempts (cancelled if the client cancelled it)."""
-        with transaction(self.conn) as c:
+    def orphaned(self, job: Job, why: str, status: int = 500) -> None:
+        """A running job whose attempt was lost (``why``: its worker died): queued again,
+        or failed with ``status`` after :data:`MAX_ATTEMPTS` attempts (cancelled if the
+        client cancelled it)."""
+        with self._write() as c:
             row = c.execute("SELECT attempts, cancel FROM jobs WHERE id = ? AND claim = ? AND "
                             "state = 'running'", (job.id, job.claim)).fetchone()
             if row is None:
@@ -265,7 +271,7 @@ class JobStore:
             if attempts >= MAX_ATTEMPTS or cancel:
                 state, status, error = (
                     ("cancelled", None, "cancelled by the client") if cancel else
-                    ("failed", 500, f"{why} {attempts} times; given up"))
+                    ("failed", status, f"{why} {attempts} times; given up"))
                 c.execute("UPDATE jobs SET state = ?, status = ?, error = ?, finished = ? "
                           "WHERE id = ? AND claim = ?",
                           (state, status, error, time.time(), job.id, job.claim))
@@ -281,7 +287,7 @@ class JobStore:
         for one batch at most, never for the whole backlog."""
         gone = 0
         while True:
-            with transaction(self.conn) as c:
+            with self._write() as c:
                 n = c.execute("DELETE FROM jobs WHERE rowid IN (SELECT rowid FROM jobs WHERE "
                               "state IN ('done', 'failed', 'cancelled') AND finished < ? "
                               "LIMIT ?)", (before, batch)).rowcount

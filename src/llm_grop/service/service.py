@@ -4,7 +4,8 @@ queueing it, waiting for its job, and its answer as the API's models."""
 from __future__ import annotations
 
 import asyncio
-from dataclasses import dataclass
+import logging
+from dataclasses import dataclass, field
 
 from starlette.concurrency import run_in_threadpool
 
@@ -21,6 +22,9 @@ from llm_grop.service.models import (
     RunBody,
     reading,
 )
+from llm_grop.service.storage import Episode, Unwritable, state
+
+log = logging.getLogger(__name__)
 
 #: Seconds between looks at a job a request waits for.
 WAIT_POLL_S = 0.02
@@ -38,10 +42,12 @@ class StillRunning(Exception):
 @dataclass
 class Service:
     """A server's configuration and its job store (``None`` in an app made only to
-    publish its OpenAPI document)."""
+    publish its OpenAPI document); ``storage``, when its disk last refused new work."""
 
     config: ServiceConfig
     store: JobStore | None
+    storage: Episode = field(default_factory=lambda: Episode(
+        "llm-grop serve", log, "new work is refused with 503 until it takes writes again"))
 
     @property
     def jobs(self) -> JobStore:
@@ -70,16 +76,22 @@ class Service:
         check_plugin_options(body)
 
     def submit(self, kind: Kind, body: ArrangeBody | PlanBody, client: str) -> str:
-        """Queue a checked job for ``client`` (its address); its id. 429 when full."""
+        """Queue a checked job for ``client`` (its address); its id. 429 when the queue is
+        full; :class:`Unwritable` (503) while the disk is full or read-only."""
         self.check(body)
+        refused = state(self.config.db.parent)
+        if refused is not None:
+            raise Unwritable(refused)
         limits = self.config.limits
         try:
-            return self.jobs.submit(kind, body.model_dump(mode="json", exclude_unset=True),
-                                    client, queue=limits.queue,
-                                    per_client=limits.jobs_per_client if kind == "run"
-                                    else limits.requests_per_client)
+            job_id = self.jobs.submit(kind, body.model_dump(mode="json", exclude_unset=True),
+                                      client, queue=limits.queue,
+                                      per_client=limits.jobs_per_client if kind == "run"
+                                      else limits.requests_per_client)
         except Overloaded as exc:
             raise Refused(429, str(exc), {"Retry-After": str(exc.retry_after_s)}) from None
+        self.storage.cleared()
+        return job_id
 
     async def finished(self, job_id: str) -> Job:
         """The job once it has ended; 504 after the server's wait."""

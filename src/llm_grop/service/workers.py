@@ -6,6 +6,11 @@ worker that died (its job is queued again, up to a bound), stops one whose job r
 its time or was cancelled, and ends that job. A worker dies with the server: the kernel
 kills it when its parent goes (``PR_SET_PDEATHSIG``), and it checks its parent between
 jobs where that is not available.
+
+While the disk under the database refuses writes (full, read-only: :mod:`.storage`), a
+worker claims nothing and holds the outcome of the job it ran until it can be recorded,
+and the supervisor skips its writes; both wait with a bounded backoff and log the episode
+once. A job whose own files could not be written is queued again (the attempt counts).
 """
 
 from __future__ import annotations
@@ -14,14 +19,19 @@ import logging
 import multiprocessing
 import os
 import signal
+import sqlite3
 import threading
 import time
+from collections.abc import Callable
+from functools import partial
 from multiprocessing.process import BaseProcess
+from pathlib import Path
 
 from llm_grop.errors import BadInput, Infeasible, LLMError, LLMGropError, LLMTransient
 from llm_grop.processes import ctrl_c_ignored_by_children, die_with_parent
 from llm_grop.service.config import ServiceConfig
 from llm_grop.service.jobs import Job, JobStore
+from llm_grop.service.storage import Backoff, problem, state
 from llm_grop.settings import in_words
 
 log = logging.getLogger(__name__)
@@ -62,34 +72,81 @@ def worker_main(config: ServiceConfig, parent: int) -> None:
     os.environ.setdefault("MUJOCO_GL", "osmesa")
     store = JobStore(config.db)
     llms = Backends(config)
+    backoff = Backoff(f"worker {os.getpid()}", log)
+    where = config.db.parent
     idle = 0.005
     try:
         while os.getppid() == parent:
-            job = store.claim(os.getpid())
+            try:
+                refused = state(where)
+                job = None if refused else store.claim(os.getpid())
+            except (sqlite3.Error, OSError) as exc:
+                refused = problem(exc, where)
+                if refused is None:
+                    raise
+            if refused is not None:
+                time.sleep(backoff.wait_s(refused))
+                continue
             if job is None:
                 time.sleep(idle)
                 idle = min(idle * 2, IDLE_POLL_S)
                 continue
+            backoff.cleared()  # the claim was written
             idle = 0.005
-            _run_one(store, job, config, llms, perform)
+            _run_one(store, job, config, llms, perform, backoff)
     finally:
         llms.close()
         store.close()
 
 
 def _run_one(store: JobStore, job: Job, config: ServiceConfig, llms: object,
-             perform: object) -> None:
+             perform: object, backoff: Backoff) -> None:
+    where = config.db.parent
+
+    def progress(message: str) -> None:
+        try:
+            store.event(job, message)
+        except (sqlite3.Error, OSError) as exc:
+            # A progress line is not worth the job: it is left out while the disk is full.
+            refused = problem(exc, where)
+            if refused is None:
+                raise
+            backoff.trouble(refused)
+
+    record: Callable[[], object]
     try:
         result, files = perform(job.kind, job.body, config, llms,  # type: ignore[operator]
-                                lambda message: store.event(job, message))
+                                progress)
+        record = partial(store.finish, job, result, files)
     except Exception as exc:  # noqa: BLE001 - every failure ends the job with its reason
-        status, message = status_of(exc)
-        if status >= 500:
-            log.error("job %s failed: %s: %s", job.id, type(exc).__name__, exc,
-                      exc_info=status == 500)
-        store.fail(job, status, message)
+        refused = problem(exc, where)
+        if refused is not None:
+            backoff.trouble(refused)
+            record = partial(store.orphaned, job, "its files could not be written (the "
+                             f"server's disk was {refused.replace('_', '-')})", status=503)
+        else:
+            status, message = status_of(exc)
+            if status >= 500:
+                log.error("job %s failed: %s: %s", job.id, type(exc).__name__, exc,
+                          exc_info=status == 500)
+            record = partial(store.fail, job, status, message)
+    _record(record, backoff, where)
+
+
+def _record(write: Callable[[], object], backoff: Backoff, where: Path) -> None:
+    """``write`` a job's outcome, trying again while the disk refuses it (a worker whose
+    job ran over its time is stopped by the supervisor meanwhile)."""
+    while True:
+        try:
+            write()
+        except (sqlite3.Error, OSError) as exc:
+            refused = problem(exc, where)
+            if refused is None:
+                raise
+            time.sleep(backoff.wait_s(refused))
+            continue
+        backoff.cleared()
         return
-    store.finish(job, result, files)
 
 
 class WorkerPool:
@@ -137,11 +194,21 @@ class WorkerPool:
         return p
 
     def _supervise(self) -> None:
-        while not self._stop.wait(SUPERVISE_S):
+        backoff = Backoff("supervisor", log)
+        wait = SUPERVISE_S
+        while not self._stop.wait(wait):
+            wait = SUPERVISE_S
             try:
                 self._round()
-            except Exception:  # noqa: BLE001 - the supervisor must outlive one bad round
-                log.exception("supervisor round failed")
+            except Exception as exc:  # noqa: BLE001 - the supervisor must outlive one bad round
+                refused = problem(exc, self.config.db.parent)
+                if refused is None:
+                    log.exception("supervisor round failed")
+                else:
+                    wait = max(wait, backoff.wait_s(refused))
+                continue
+            if state(self.config.db.parent) is None:  # a round may have written nothing
+                backoff.cleared()
 
     def _round(self) -> None:
         store = self._store
