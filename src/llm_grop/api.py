@@ -76,7 +76,8 @@ def make_llm(llm: str | LLM = "embedded", options: BackendOptions | None = None,
     ``record``, answering seeded calls asked before from the LLM cache in directory
     ``cache`` (:mod:`llm_grop.llm.cache`; ``None``: no cache)."""
     backend = create_llm(llm, options) if isinstance(llm, str) else llm
-    return call_log(backend, record=record, cache=cache)
+    return call_log(backend, record=record, cache=cache,
+                    max_answer_bytes=(options or BackendOptions()).max_answer_bytes)
 
 
 def resolve_items(request: str | None, task: int | None, catalog: Catalog,

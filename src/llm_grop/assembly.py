@@ -153,8 +153,8 @@ def execution_policy(s: RunSettings, base: ExecutionPolicy | None = None) -> Exe
 
 
 def call_log(llm: LLM, *, record: str | PathLike[str] | None = None,
-             cache: str | PathLike[str] | None = None, chosen_by: str | None = None
-             ) -> CallLog:
+             cache: str | PathLike[str] | None = None, chosen_by: str | None = None,
+             max_answer_bytes: int = DEFAULTS.max_answer_bytes) -> CallLog:
     """A fresh log of ``llm``'s calls: appended to the JSONL file ``record``, answered
     from the LLM cache in directory ``cache`` where asked before (``None``: neither).
     The one way the API, the bench's trials and the service log an LLM; a backend kept
@@ -162,7 +162,8 @@ def call_log(llm: LLM, *, record: str | PathLike[str] | None = None,
     if isinstance(llm, BaseLLM):
         llm = llm.for_run()  # type: ignore[assignment]
     return CallLog(llm, Path(record) if record is not None else None,
-                   cache=LLMCache(cache) if cache is not None else None, chosen_by=chosen_by)
+                   cache=LLMCache(cache, max_answer_bytes) if cache is not None else None,
+                   chosen_by=chosen_by)
 
 
 def make_backend(s: RunSettings, base: BackendOptions | None = None) -> LLM:
@@ -175,8 +176,8 @@ def make_backend(s: RunSettings, base: BackendOptions | None = None) -> LLM:
 def resolve_llm(s: RunSettings) -> tuple[RunSettings, AutoChoice | None]:
     """The record ``s`` with ``llm="auto"`` replaced by what it chooses
     (:mod:`llm_grop.llm.auto`: the backend, its server and model), and the choice
-    (``None``: the backend was named). The choice is logged: a warning for each probed
-    port skipped, and one when it falls back to the small embedded model."""
+    (``None``: the backend was named). A probed port that answered but was skipped is a
+    logged warning."""
     if s.llm != AUTO:
         return s, None
     from llm_grop.llm.auto import choose
@@ -184,10 +185,8 @@ def resolve_llm(s: RunSettings) -> tuple[RunSettings, AutoChoice | None]:
     choice = choose(s.model, s.base_url)
     for skipped in choice.skipped:
         log.warning("--llm auto: %s", skipped)
-    if choice.weak:
-        log.warning("--llm auto: %s", choice.note)
-    else:
-        log.info("--llm auto: %s", choice.note)
+    # Said once the run is done (its LLM line), after any bad input is reported alone.
+    log.info("--llm auto: %s", choice.note)
     return s.with_values(llm=choice.backend, base_url=choice.base_url,
                          model=choice.model), choice
 
@@ -288,8 +287,10 @@ class RunInputs:
             return self.llm
         check_backend(self.settings)
         if self.llm is not None:
-            return call_log(self.llm, record=self.record, cache=self.settings.cache)
+            return call_log(self.llm, record=self.record, cache=self.settings.cache,
+                            max_answer_bytes=self.settings.max_answer_bytes)
         settings, choice = resolve_llm(self.settings)
         check_backend(settings)
         return call_log(make_backend(settings, self.bases.backend), record=self.record,
-                        cache=settings.cache, chosen_by=choice.why if choice else None)
+                        cache=settings.cache, chosen_by=choice.why if choice else None,
+                        max_answer_bytes=settings.max_answer_bytes)

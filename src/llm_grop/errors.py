@@ -84,6 +84,13 @@ class LLMUnavailable(LLMError):
     time is :class:`LLMTransient`."""
 
 
+class LLMAnswerUnusable(LLMError):
+    """The LLM answered, but nothing usable: an answer over ``max_answer_bytes``, or
+    answers with no readable relation after every attempt. A single run stops on it (bad
+    input, exit 2); a bench keeps the trial as ``llm-failed`` and goes on, since another
+    answer may be usable."""
+
+
 class LLMTransient(LLMGropError):
     """The LLM service did not answer this time (unreachable, over the deadline, busy,
     failing with 5xx, or a garbled answer) where asking again later may succeed (exit 3).

@@ -7,6 +7,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from llm_grop.cli import main
 from scripted import TASK1_GOOD, scripted
 
@@ -55,8 +57,24 @@ def test_max_failed_stops_a_bench_whose_server_is_down(chat_server, tmp_path: Pa
     out = tmp_path / "down"
     assert _bench(chat_server, out, "--max-failed", "2") == 3  # the service is unavailable
     err = capsys.readouterr().err.strip()
-    assert err.startswith("llm-grop: error: --max-failed 2: 2 trials got no LLM answer")
+    assert err.startswith("llm-grop: error: --max-failed 2: 2 trials got no usable LLM answer")
     assert err.endswith("stopped early, every finished trial is saved; rerun to retry them")
     assert "\n" not in err
     rows = _rows(out)
     assert 2 <= len(rows) < 8 and all(r["status"] == "llm-failed" for r in rows)
+
+
+@pytest.mark.parametrize(("answer", "reason"), [
+    ("x" * 3000, "larger than 2000 bytes"),
+    ("I would rather not say where things go.", "gave no usable spatial relation"),
+])
+def test_an_oversized_or_unreadable_answer_is_a_failed_trial_not_a_stop(
+        chat_server, tmp_path: Path, answer: str, reason: str) -> None:
+    """Answers that asking again may cure (too large, prose with no relation in it) become
+    llm-failed rows, and the bench goes on to its other trials."""
+    chat_server.reply = scripted([answer])
+    out = tmp_path / "bench"
+    assert _bench(chat_server, out, "--max-answer-bytes", "2000") == 0
+    rows = _rows(out)
+    assert len(rows) == 8 and {r["status"] for r in rows} == {"llm-failed"}
+    assert all(reason in r["reason"] for r in rows)

@@ -153,3 +153,30 @@ def test_concurrent_writers_leave_whole_entries(tmp_path: Path) -> None:
     for entry in entries:
         data = json.loads(entry.read_text())
         assert data["record"]["response"] == f"answer {data['key']['prompt']}"
+
+
+@pytest.mark.parametrize("special", ["fifo", "symlink to /dev/zero", "oversized answer"])
+def test_an_entry_that_is_no_regular_file_or_too_large_is_a_miss(
+        chat_server, tmp_path: Path, special: str, caplog) -> None:
+    """A FIFO never blocks the call, a link to an endless device is never read, and an
+    answer over --max-answer-bytes is never served from the cache."""
+    import os
+
+    first = _log(chat_server, tmp_path).complete("p", PARAMS)
+    (entry,) = tmp_path.glob("*/*.json")
+    if special == "fifo":
+        entry.unlink()
+        os.mkfifo(entry)
+    elif special == "symlink to /dev/zero":
+        entry.unlink()
+        entry.symlink_to("/dev/zero")
+    else:
+        data = json.loads(entry.read_text())
+        data["record"]["response"] = "x" * 2_000_000
+        entry.write_text(json.dumps(data))
+    with caplog.at_level("WARNING", logger="llm_grop.llm.cache"):
+        again = _log(chat_server, tmp_path).complete("p", PARAMS)
+    assert not again.cached and again.response == first.response
+    assert [r.message for r in caplog.records if "ignoring bad entry" in r.message]
+    assert entry.is_file() and not entry.is_symlink()  # rewritten as a regular entry
+    assert _log(chat_server, tmp_path).complete("p", PARAMS).cached

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import time
 from collections import deque
@@ -10,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from llm_grop.errors import LLMTransient, LLMUnavailable
+from llm_grop.errors import LLMAnswerUnusable, LLMTransient, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, SamplingParams
 from llm_grop.llm.openai_backend import DEFAULT_MODEL, PLACEHOLDER_API_KEY, OpenAILLM
 from llm_grop.llm.registry import create_llm
@@ -214,7 +215,7 @@ def test_a_retry_after_past_the_deadline_is_not_waited_for(chat_server: ChatServ
 def test_a_huge_answer_is_refused_as_it_arrives(chat_server: ChatServer) -> None:
     chat_server.reply = lambda body: "x" * (5 * 1024 * 1024)
     llm = OpenAILLM(BackendOptions(base_url=chat_server.url, max_answer_bytes=1024 * 1024))
-    with pytest.raises(LLMUnavailable, match=r"is larger than 1048576 bytes; refused"):
+    with pytest.raises(LLMAnswerUnusable, match=r"is larger than 1048576 bytes; refused"):
         llm.complete("hi", PARAMS)
 
 
@@ -223,7 +224,7 @@ def test_a_huge_error_answer_is_refused_as_it_arrives(chat_server: ChatServer) -
     chat_server.error_bytes = 5 * 1024 * 1024
     llm = OpenAILLM(BackendOptions(base_url=chat_server.url, max_answer_bytes=1024 * 1024,
                                    max_retries=2))
-    with pytest.raises(LLMUnavailable, match=r"is larger than 1048576 bytes; refused"):
+    with pytest.raises(LLMAnswerUnusable, match=r"is larger than 1048576 bytes; refused"):
         llm.complete("hi", PARAMS)
     assert len(chat_server.requests) == 1  # refused, not asked again
 
@@ -264,3 +265,54 @@ def test_passing_failures_are_transient_and_lasting_ones_are_not(chat_server: Ch
     with pytest.raises(LLMUnavailable) as info:
         make(chat_server, max_retries=0, api_key="wrong").complete("hi", PARAMS)
     assert not isinstance(info.value, LLMTransient)
+
+
+@pytest.fixture
+def hostile() -> Iterator[tuple[str, list[str]]]:
+    """A loopback server that misbehaves as told: ``"headers"`` trickles its status line
+    and headers a byte every 0.2 s (for half an hour), ``"silent"`` reads the request and
+    never answers. Yields its /v1 URL and the list to append the behaviour to."""
+    import threading
+
+    behaviour: list[str] = []
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(16)
+    stop = threading.Event()
+
+    def one(conn: socket.socket) -> None:
+        with conn, contextlib.suppress(OSError):
+            conn.recv(65536)
+            if behaviour[-1] == "headers":
+                for byte in b"HTTP/1.1 200 OK\r\nX-Slow: " + b"a" * 10_000:
+                    if stop.is_set():
+                        return
+                    conn.sendall(bytes([byte]))
+                    time.sleep(0.2)
+            stop.wait(1800)
+
+    def serve() -> None:
+        with contextlib.suppress(OSError):
+            while True:
+                conn, _ = srv.accept()
+                threading.Thread(target=one, args=(conn,), daemon=True).start()
+
+    threading.Thread(target=serve, daemon=True).start()
+    yield f"http://127.0.0.1:{srv.getsockname()[1]}/v1", behaviour
+    stop.set()
+    srv.close()
+
+
+@pytest.mark.parametrize("behaviour", ["headers", "silent"])
+def test_a_server_that_trickles_its_headers_or_says_nothing_is_cut_at_the_deadline(
+        hostile: tuple[str, list[str]], behaviour: str) -> None:
+    url, told = hostile
+    told.append(behaviour)
+    llm = OpenAILLM(BackendOptions(base_url=url, timeout_s=1.0, max_retries=2))
+    start = time.monotonic()
+    with pytest.raises(LLMTransient) as err:
+        llm.complete("Where does the fork go?", PARAMS)
+    # The server would hold the call for half an hour; the deadline ends it.
+    assert time.monotonic() - start < 30
+    assert "no answer within the 1 s deadline" in str(err.value)
+    llm.close()

@@ -28,7 +28,7 @@ from llm_grop.arrangement import (
 )
 from llm_grop.arrangement.layout import GuidedLayout
 from llm_grop.arrangement.setting import Attempt, Sampled, Setting
-from llm_grop.errors import BadInput, Infeasible, LLMError, ReplayMissing
+from llm_grop.errors import BadInput, Infeasible, LLMAnswerUnusable, ReplayMissing
 from llm_grop.language.answer_reader import parse_relations
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.settings import DEFAULTS
@@ -200,7 +200,7 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
             if not accepted:
                 last = attempts[-1] if attempts else None
                 detail = f"; last answer had {len(last.relations)} relation(s)" if last else ""
-                raise LLMError(
+                raise LLMAnswerUnusable(
                     f"{llm.backend} LLM gave no usable spatial relation in "
                     f"{options.max_attempts} attempt(s){detail}")
             warnings += [f"dropped to restore consistency: {_preview(r.line or r.sentence())}"

@@ -92,7 +92,7 @@ def print_arrangement(result: ArrangementResult, console: Console,
     console.print(pos_table)
     print_warnings(a.warnings, err or console)
     if a.llm is not None:
-        console.print(llm_line(a.llm))
+        print_llm(a.llm, console, err)
 
 
 def print_run(result: RunResult, console: Console, err: Console | None = None) -> None:
@@ -132,7 +132,7 @@ def print_run(result: RunResult, console: Console, err: Console | None = None) -
     console.print(f"Rated by the automatic rater (`llm-grop rate` explains): {rating.summary}")
     print_warnings(result.planned.warnings, err or console)
     if result.planned.llm is not None:
-        console.print(llm_line(result.planned.llm))
+        print_llm(result.planned.llm, console, err)
 
 
 def final_rating(result: RunResult) -> Rating:
@@ -143,6 +143,18 @@ def final_rating(result: RunResult) -> Rating:
 
     return rate(arrangement_doc(result.final, physical=True),
                 requested=[p.name for p in result.planned.placements])
+
+
+def print_llm(llm: LLMSummary, console: Console, err: Console | None = None) -> None:
+    """The LLM's line, and on ``err`` (else ``console``) a note when ``--llm auto`` fell
+    back to the small embedded model."""
+    from llm_grop.llm.auto import fallback_note
+    from llm_grop.llm.embedded import DEFAULT_MODEL
+
+    console.print(llm_line(llm))
+    if llm.backend == "embedded" and llm.model == DEFAULT_MODEL and llm.chosen_by is not None:
+        (err or console).print(f"note: {fallback_note(llm.chosen_by)}", markup=False,
+                               highlight=False)
 
 
 def llm_line(llm: LLMSummary) -> str:

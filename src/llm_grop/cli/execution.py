@@ -40,7 +40,7 @@ _EXECUTION_OPTIONS = [
     option("cache"),
     NO_CACHE,
     click.option("--max-failed", type=click.IntRange(1),
-                 help="Stop once this many trials got no LLM answer after their retries "
+                 help="Stop once this many trials got no usable LLM answer after their retries "
                       "(the server is down) [default: never; such trials are recorded "
                       "llm-failed, and a rerun retries them]."),
 ]

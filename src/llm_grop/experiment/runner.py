@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from llm_grop import locking, plugins
+from llm_grop.assembly import AUTO
 from llm_grop.contract.models import TrialRow
 from llm_grop.errors import BadInput, LLMTransient
 from llm_grop.experiment.executors import Executor, ExecutorOptions, LocalExecutor
@@ -135,8 +136,10 @@ def identity(exp: Experiment) -> dict[str, Any]:
 def _plugin_origins(exp: Experiment) -> dict[str, str]:
     """Where each component the experiment uses comes from, when llm-grop does not ship it
     (a plugin's version decides its results as llm-grop's own version does)."""
-    used = [(BACKENDS, exp.settings.run.llm), (SIMULATORS, exp.settings.run.simulator),
-            *((METHODS, m) for m in exp.methods)]
+    llm = exp.settings.run.llm
+    # ``auto`` is left so only when no method asks an LLM.
+    used = [*([(BACKENDS, llm)] if llm != AUTO else []),
+            (SIMULATORS, exp.settings.run.simulator), *((METHODS, m) for m in exp.methods)]
     origins = {f"{reg.kind} {name}": reg.origin(name) for reg, name in used}
     return {k: v for k, v in origins.items() if v != "llm-grop"}
 
@@ -276,7 +279,7 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
                 failed.append(row)
                 if max_failed is not None and len(failed) >= max_failed:
                     raise LLMTransient(
-                        f"{len(failed)} trials got no LLM answer (the last: {row.reason}); "
+                        f"{len(failed)} trials got no usable LLM answer (the last: {row.reason}); "
                         "stopped early, every finished trial is saved; rerun to retry them",
                         param="max_failed", value=max_failed)
     except KeyboardInterrupt:

@@ -344,5 +344,5 @@ def print_summary(summary: Summary, console: Console, *, with_se: bool = False,
         console.print(rich_table(PAIRED_TITLE, *paired_table(paired), left=3))
     if summary.llm_failed:
         n = sum(k for _, k in summary.llm_failed)
-        console.print(f"[yellow]{n} trial(s) got no LLM answer after their retries and are "
+        console.print(f"[yellow]{n} trial(s) got no usable LLM answer after their retries and are "
                       "left out; rerun the same command to retry them[/yellow]")

@@ -22,7 +22,7 @@ from llm_grop.assembly import call_log, make_backend, make_simulator
 from llm_grop.contract.models import TrialRow
 from llm_grop.contract.run_json import run_doc
 from llm_grop.contract.serialize import arrangement_doc
-from llm_grop.errors import Infeasible, LLMTransient
+from llm_grop.errors import Infeasible, LLMAnswerUnusable, LLMTransient
 from llm_grop.evaluation.rater import rate
 from llm_grop.files.scene_file import load_scene, set_target_top
 from llm_grop.llm.base import LLM, BackendOptions, CallLog
@@ -104,7 +104,7 @@ class TrialRunner:
         s = self.settings.run
         if self._backend is None:
             self._backend = make_backend(s, BackendOptions(n_threads=self.settings.llm_threads))
-        return call_log(self._backend, cache=s.cache)
+        return call_log(self._backend, cache=s.cache, max_answer_bytes=s.max_answer_bytes)
 
     def __call__(self, spec: TrialSpec, images: Path | None = None) -> TrialRow:
         """The trial's row; its pictures go to ``images`` when given, else to the
@@ -122,10 +122,10 @@ class TrialRunner:
         try:
             result = run(settings=settings, llm=llm_log, simulator=self.simulator,
                          scene=self.scene, catalog=self.catalog, tasks=self.tasks)
-        except (Infeasible, LLMTransient) as exc:
-            # A trial whose LLM did not answer after its retries is kept as such, and the
-            # bench goes on; a rerun asks again. A wrong key, model or replay file is no
-            # passing failure: it stops the bench.
+        except (Infeasible, LLMTransient, LLMAnswerUnusable) as exc:
+            # A trial whose LLM did not answer after its retries, or answered nothing
+            # usable, is kept as such, and the bench goes on; a rerun asks again. A wrong
+            # key, model or replay file is no passing failure: it stops the bench.
             status = "infeasible" if isinstance(exc, Infeasible) else "llm-failed"
             log.info("task %d trial %d %s: %s: %s", spec.task, spec.trial, spec.method,
                      status, exc)

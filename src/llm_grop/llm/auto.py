@@ -70,10 +70,16 @@ class AutoChoice:
         it is for and how to use a capable one."""
         if not self.weak:
             return f"using {self.backend} {self.model or ''}: {self.why}"
-        return (f"{self.why}; using the embedded SmolLM2-135M, a small model for offline "
-                "smoke runs that often sets a table wrongly. For a capable one start "
-                "Ollama, llama.cpp's llama-server or vLLM, or pass --base-url URL (README: "
-                "What to expect)")
+        return fallback_note(self.why)
+
+
+def fallback_note(why: str) -> str:
+    """What a command says when ``auto`` fell back to the embedded model because of
+    ``why``: what that model is for, and how to use a capable one."""
+    return (f"--llm auto: {why}; so the embedded SmolLM2-135M answered, a small model for "
+            "offline smoke runs that often sets a table wrongly. For a capable one start "
+            "Ollama, llama.cpp's llama-server or vLLM, or pass --base-url URL (README: What "
+            "to expect)")
 
 
 def bounded_get(url: str, key: str | None, timeout_s: float) -> tuple[int, bytes]:

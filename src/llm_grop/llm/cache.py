@@ -25,6 +25,7 @@ import json
 import logging
 import os
 import secrets
+import stat
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -32,6 +33,7 @@ from typing import Any
 
 from llm_grop.errors import LLMError
 from llm_grop.llm.record import LLMCallRecord, record_from_dict
+from llm_grop.settings import DEFAULTS
 
 log = logging.getLogger(__name__)
 
@@ -39,6 +41,8 @@ log = logging.getLogger(__name__)
 DEFAULT_DIR = Path("~/.cache/llm-grop/llm-calls")
 #: The environment variable that moves the default directory.
 ENV_DIR = "LLM_GROP_CACHE_DIR"
+#: Bytes an entry may hold besides its answer: its key, prompt and schema.
+_ENTRY_OVERHEAD_BYTES = 4 * 1024 * 1024
 #: Bumped when the key's meaning changes, so older entries are never read as newer ones.
 _FORMAT = 1
 
@@ -82,10 +86,13 @@ def _plain(data: Any) -> Any:
 
 
 class LLMCache:
-    """The answers under ``root`` (created on the first write)."""
+    """The answers under ``root`` (created on the first write); an answer over
+    ``max_answer_bytes`` (bytes of its UTF-8 text) is never served."""
 
-    def __init__(self, root: str | os.PathLike[str]) -> None:
+    def __init__(self, root: str | os.PathLike[str],
+                 max_answer_bytes: int = DEFAULTS.max_answer_bytes) -> None:
         self.root = Path(root).expanduser()
+        self.max_answer_bytes = max_answer_bytes
 
     def _path(self, key: CallKey) -> Path:
         digest = key.digest
@@ -97,10 +104,11 @@ class LLMCache:
         An entry is served only if it is whole and its stored key is ``key``: a damaged
         entry (a disk error, a truncated file, a hand edit, a ``null`` answer) or one
         copied under another key's name is a miss, with one warning, and the answer asked
-        again replaces it."""
+        again replaces it. So is anything but a regular file (a FIFO, a device, a symbolic
+        link: it is never opened in a way that could block), and an answer over the cap."""
         path = self._path(key)
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
+            data = json.loads(self._read(path))
             if not isinstance(data, dict):
                 raise ValueError("not a JSON object")
             if data.get("key") != _plain(asdict(key)):
@@ -108,12 +116,29 @@ class LLMCache:
             record = record_from_dict(data.get("record"), "record")
             if record.prompt != key.prompt:
                 raise ValueError("its prompt is another call's")
+            if len(record.response.encode("utf-8")) > self.max_answer_bytes:
+                raise ValueError(f"its answer is over {self.max_answer_bytes} bytes")
         except FileNotFoundError:
             return None
         except (OSError, ValueError, LLMError) as exc:
             log.warning("LLM cache: ignoring bad entry %s (%s); asking again", path, exc)
             return None
         return replace(record, cached=True)
+
+    def _read(self, path: Path) -> str:
+        """The text of the entry at ``path``, which must be a regular file of a bounded
+        size: its prompt, its key and an answer within the cap."""
+        # O_NONBLOCK: opening a FIFO for reading would wait for a writer.
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
+        with os.fdopen(fd, "rb") as f:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                raise ValueError("not a regular file")
+            # Room for the key (which holds the prompt twice) beside the answer.
+            limit = self.max_answer_bytes + _ENTRY_OVERHEAD_BYTES
+            data = f.read(limit + 1)
+        if len(data) > limit:
+            raise ValueError(f"over {limit} bytes")
+        return data.decode("utf-8")
 
     def put(self, key: CallKey, record: LLMCallRecord) -> None:
         """Store ``record`` as the answer to ``key``; a failure to write is logged, never

@@ -28,6 +28,7 @@ llama.cpp server) through the official ``openai`` SDK.
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import email.utils
 import json
@@ -35,6 +36,7 @@ import math
 import os
 import random
 import re
+import socket
 import threading
 import time
 from collections.abc import Mapping
@@ -45,7 +47,7 @@ from typing import Any
 import httpx
 import openai
 
-from llm_grop.errors import LLMTransient, LLMUnavailable
+from llm_grop.errors import LLMAnswerUnusable, LLMError, LLMTransient, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, BaseLLM, SamplingParams
 from llm_grop.llm.record import LLMCallRecord
 
@@ -120,8 +122,12 @@ class OpenAILLM(BaseLLM):
                 api_key=api_key,
                 timeout=options.timeout_s,
                 max_retries=0,
+                # A fresh connection per request, so that each attempt's socket is known
+                # to its deadline (:meth:`_trace`); an LLM call outlasts a handshake.
                 http_client=openai.DefaultHttpxClient(
-                    event_hooks={"response": [self._read_other_body]}),
+                    limits=httpx.Limits(max_keepalive_connections=0),
+                    event_hooks={"request": [self._traced],
+                                 "response": [self._read_other_body]}),
             )
         except (openai.OpenAIError, ValueError, TypeError) as exc:
             raise LLMUnavailable(f"openai backend: cannot configure the client: {_one_line(exc)}"
@@ -215,6 +221,24 @@ class OpenAILLM(BaseLLM):
         remaining = deadline - time.monotonic()
         if remaining <= 0:
             raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
+        # httpx's timeouts bound each read, so a server that trickles its headers a byte
+        # at a time would hold the call for ever: at the deadline the socket is shut.
+        cutoff = self._call.cutoff = _Cutoff()
+        timer = threading.Timer(remaining, cutoff.cut)
+        timer.daemon = True
+        timer.start()
+        try:
+            return self._answer(kwargs, deadline, remaining)
+        except openai.APIConnectionError:
+            if cutoff.fired:
+                raise openai.APITimeoutError(request=None) from None  # type: ignore[arg-type]
+            raise
+        finally:
+            timer.cancel()
+            self._call.cutoff = None
+
+    def _answer(self, kwargs: dict[str, Any], deadline: float, remaining: float) -> Any:
+        """:meth:`_attempt`'s request and its answer's JSON."""
         try:
             with self._client.chat.completions.with_streaming_response.create(
                     **kwargs, timeout=remaining) as raw:
@@ -241,6 +265,19 @@ class OpenAILLM(BaseLLM):
                 raise exc.__cause__ from None
             raise
         return json.loads(b"".join(chunks))
+
+    def _traced(self, request: httpx.Request) -> None:
+        """Have httpcore report the request's connection to :meth:`_trace`."""
+        request.extensions["trace"] = self._trace
+
+    def _trace(self, event: str, info: dict[str, Any]) -> None:
+        """httpcore's report of a request's progress: the new connection's socket is handed
+        to this thread's attempt, which shuts it at the deadline."""
+        cutoff = getattr(self._call, "cutoff", None)
+        if event == "connection.connect_tcp.complete" and cutoff is not None:
+            stream = info.get("return_value")
+            if stream is not None:
+                cutoff.watch(stream.get_extra_info("socket"))
 
     def _read_other_body(self, response: httpx.Response) -> None:
         """Read the body of an answer other than a success (an error, a redirect) within
@@ -293,11 +330,11 @@ class OpenAILLM(BaseLLM):
         """Close the HTTP connections; the backend is unusable afterwards."""
         self._client.close()
 
-    def _unavailable(self, exc: openai.OpenAIError) -> LLMUnavailable | LLMTransient:
+    def _unavailable(self, exc: openai.OpenAIError) -> LLMError | LLMTransient:
         """The one-line error for a failed request."""
         where = self.base_url
         if isinstance(exc, _TooLarge):
-            return LLMUnavailable(f"openai backend: the answer from {where} is larger than "
+            return LLMAnswerUnusable(f"openai backend: the answer from {where} is larger than "
                                   f"{self._max_bytes} bytes; refused (raise "
                                   "max_answer_bytes=N if it should be allowed)",
                                   mentions=("max_answer_bytes",))
@@ -352,6 +389,36 @@ def _seconds(value: str | None, scale: float) -> float | None:
             when = when.replace(tzinfo=datetime.UTC)
         wait = when.timestamp() - time.time()
     return max(wait, 0.0) if math.isfinite(wait) else None
+
+
+class _Cutoff:
+    """One attempt's socket and whether its deadline passed: :meth:`cut`, called at the
+    deadline from a timer's thread, shuts the socket down so that a read blocked on it
+    ends, whatever the server is sending."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._sock: socket.socket | None = None
+        self.fired = False
+
+    def watch(self, sock: socket.socket | None) -> None:
+        """The attempt's socket, once connected (shut at once if the deadline passed)."""
+        with self._lock:
+            self._sock = sock
+            if self.fired:
+                _shut(sock)
+
+    def cut(self) -> None:
+        """The deadline passed."""
+        with self._lock:
+            self.fired = True
+            _shut(self._sock)
+
+
+def _shut(sock: socket.socket | None) -> None:
+    if sock is not None:
+        with contextlib.suppress(OSError):
+            sock.shutdown(socket.SHUT_RDWR)
 
 
 class _TooLarge(openai.OpenAIError):
