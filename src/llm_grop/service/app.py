@@ -63,7 +63,8 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
         (401, "a missing or wrong bearer token"), (409, "nothing feasible"),
         (413, "the body is too large"), (422, "bad input"),
         (429, "the server is busy (see Retry-After)"),
-        (503, "the server's LLM backend could not answer"))} | {
+        (503, "the server's LLM backend could not answer, or its disk is full or read-only "
+              "(with Retry-After)"))} | {
     202: {"model": Pending, "description": "not ready within the server's wait; poll the "
                                            "permalink (also in Location)"}}
 
