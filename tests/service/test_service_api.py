@@ -261,3 +261,33 @@ def test_a_video_is_served_in_ranges(server: Server) -> None:
         assert c.get(job["picture"], headers={"range": "bytes=-5"}).content == whole[-5:]
         bad = c.get(job["picture"], headers={"range": f"bytes={len(whole)}-"})
         assert bad.status_code == 416 and bad.json()["code"] == "bad_range"
+
+
+def test_info_gives_counts_and_bytes_as_whole_numbers(server: Server) -> None:
+    with server.client() as c:
+        limits = c.get("/v1/info").json()["limits"]
+    for name in ("body_bytes", "body_depth", "request_chars", "objects", "queue",
+                 "jobs_per_client"):
+        assert isinstance(limits[name], int), (name, limits[name])
+    assert '"body_bytes": 262144,' in json.dumps(limits) + ","
+
+
+def test_the_playground_serves_its_icon(server: Server) -> None:
+    with server.client(follow_redirects=True) as c:
+        icon = c.get("/favicon.ico")
+        page = c.get("/")
+    assert icon.status_code == 200 and icon.headers["content-type"].startswith("image/svg")
+    assert 'rel="icon" href="/static/favicon.svg"' in page.text
+
+
+@pytest.mark.parametrize(("diners", "caption"), [
+    (1, "(the diner sits at the bottom)"),
+    (2, "(2 diners, each drawn at their seat and labelled)")])
+def test_the_playgrounds_caption_says_where_the_diners_sit(server: Server, diners: int,
+                                                           caption: str) -> None:
+    with server.client() as c:
+        r = c.post("/v1/arrangements", json={"request": "a dinner plate", "diners": diners})
+        assert r.status_code == 200, r.text
+        job_id = r.json()["permalink"].rstrip("/").rsplit("/", 1)[-1]
+        page = c.get(f"/a/{job_id}")
+    assert page.status_code == 200 and caption in page.text

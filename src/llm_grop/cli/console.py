@@ -83,8 +83,10 @@ def print_arrangement(result: ArrangementResult, console: Console,
                           "" if gap is None else f"{gap * 100:.1f}", r.source)
     console.print(rel_table)
 
-    pos_table = RichTable(title=f"Positions (m), configuration 0 of "
-                          f"{len(result.configurations)} (from 0)", title_justify="left")
+    # A line of its own: a table's title wraps at the table's width, which is narrow.
+    console.print(f"Positions (m), configuration 0 of {len(result.configurations)} (from 0)",
+                  highlight=False)
+    pos_table = RichTable()
     for col in ("object", "x", "y", "yaw", "on"):
         pos_table.add_column(col, justify="right" if col in ("x", "y", "yaw") else "left")
     for p in a.placements:

@@ -233,7 +233,8 @@ class Info(BaseModel):
     backends: list[str]
     methods: list[str]
     simulators: list[str]
-    limits: dict[str, float]
+    limits: dict[str, int | float] = Field(
+        description="the server's limits: counts and bytes as whole numbers, seconds as numbers")
     queue: dict[str, int]
 
 

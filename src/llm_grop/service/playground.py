@@ -87,6 +87,11 @@ def add_playground(app: FastAPI, service: Service) -> None:
     def index(request: Request) -> HTMLResponse:
         return page(request)
 
+    @app.get("/favicon.ico", include_in_schema=False)
+    def favicon() -> Response:
+        # Browsers ask for /favicon.ico whatever the page links; the icon is an SVG.
+        return RedirectResponse("/static/favicon.svg", status_code=301)
+
     @app.get("/kinds.css", include_in_schema=False)
     async def kinds_css() -> Response:
         from llm_grop.render.table import kind_color
@@ -219,9 +224,12 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
                                     "phone": url + phone if phone in files else None})
 
     if job.kind == "arrange" and "arrangement" in result:
-        out["arrangement"] = ArrangementDoc.model_validate(result["arrangement"])
-        picture("table.png", "The arrangement from above", "The arrangement, from above "
-                "(the diner sits at the bottom)", "table_phone.png")
+        out["arrangement"] = doc = ArrangementDoc.model_validate(result["arrangement"])
+        diners = len(doc.table.diners or ()) or 1
+        where = "the diner sits at the bottom" if diners == 1 else \
+            f"{diners} diners, each drawn at their seat and labelled"
+        picture("table.png", "The arrangement from above",
+                f"The arrangement, from above ({where})", "table_phone.png")
     elif job.kind == "plan" and "plan" in result:
         plan = result["plan"]
         out["arrangement"] = ArrangementDoc.model_validate(plan["arrangement"])
