@@ -4,6 +4,7 @@ schemas, and every bad input is a 4xx with the project's one-line message."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import httpx
@@ -291,3 +292,24 @@ def test_the_playgrounds_caption_says_where_the_diners_sit(server: Server, diner
         job_id = r.json()["permalink"].rstrip("/").rsplit("/", 1)[-1]
         page = c.get(f"/a/{job_id}")
     assert page.status_code == 200 and caption in page.text
+
+
+@pytest.mark.parametrize("guess", ["on", "off"])
+def test_the_playground_offers_guess_as_its_own_control(server: Server, guess: str) -> None:
+    form = {"request": "a dinner plate", "action": "arrange", "guess": guess}
+    with server.client(follow_redirects=True) as c:
+        page = c.post("/play", data=form, headers={"origin": server.url})
+    assert page.status_code == 200, page.text
+    chosen = re.search(r'<select name="guess">.*?</select>', page.text, flags=re.S)
+    assert chosen and f'<option value="{guess}" selected>' in chosen[0]
+
+
+def test_the_playground_words_warnings_with_its_own_controls() -> None:
+    from llm_grop.settings import words
+
+    warning = ("the embedded LLM chose what the request does not say: 2 bread; "
+               "guess=False refuses this")
+    assert words(warning, "web").endswith(
+        '2 bread; the "refuse the request" choice for the objects a request leaves out '
+        "refuses this")
+    assert words("m=0 is too few", "web") == '"m": 0 is too few'

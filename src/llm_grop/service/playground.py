@@ -18,7 +18,7 @@ import jinja2
 from fastapi import FastAPI, Form, Request
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
-from pydantic import ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from starlette.concurrency import run_in_threadpool
 
 from llm_grop.contract.models import ArrangementDoc
@@ -32,7 +32,7 @@ from llm_grop.service.models import (
     one_line,
 )
 from llm_grop.service.service import Service, StillRunning
-from llm_grop.settings import DEFAULTS
+from llm_grop.settings import DEFAULTS, words
 from llm_grop.web import same_origin
 
 HISTORY_COOKIE = "llm_grop_history"
@@ -103,22 +103,11 @@ def add_playground(app: FastAPI, service: Service) -> None:
                         headers={"Cache-Control": "public, max-age=3600"})
 
     @app.post("/play", include_in_schema=False)
-    async def play(request: Request, action: Annotated[str, Form(max_length=10)],
-                   request_text: Annotated[str, Form(alias="request", max_length=2000)],
-                   llm: Annotated[str, Form(max_length=64)] = "",
-                   shape: Annotated[str, Form(max_length=16)] = "rectangle",
-                   width_cm: Annotated[str, Form(max_length=16)] = "90",
-                   depth_cm: Annotated[str, Form(max_length=16)] = "60",
-                   diners: Annotated[str, Form(max_length=4)] = "1",
-                   seed: Annotated[str, Form(max_length=12)] = "0",
-                   simulator: Annotated[str, Form(max_length=32)] = DEFAULTS.simulator,
-                   preferences: Annotated[str, Form(max_length=4000)] = "") -> Response:
+    async def play(request: Request, posted: Annotated[PlayForm, Form()]) -> Response:
         _check_origin(request)
-        fields = {"request": request_text, "llm": llm, "shape": shape, "width_cm": width_cm,
-                  "depth_cm": depth_cm, "diners": diners, "seed": seed,
-                  "simulator": simulator, "preferences": preferences}
+        fields = posted.model_dump(exclude={"action"})
         try:
-            kind, body = _body(action, fields)
+            kind, body = _body(posted.action, fields)
         except ValidationError as exc:
             return await run_in_threadpool(page, request, 422, form=_form(fields),
                                            error=one_line(exc.errors(), where=None))
@@ -149,6 +138,26 @@ def add_playground(app: FastAPI, service: Service) -> None:
         return page(request, status, form=_form(_fields(job)), **_result(service, job))
 
 
+class PlayForm(BaseModel):
+    """The playground's form as posted: every field text, as a browser sends it, read into
+    an API body by :func:`_body`."""
+
+    model_config = ConfigDict(extra="ignore")
+
+    action: str = Field(max_length=10)
+    request: str = Field(max_length=2000)
+    llm: str = Field("", max_length=64)
+    shape: str = Field("rectangle", max_length=16)
+    width_cm: str = Field("90", max_length=16)
+    depth_cm: str = Field("60", max_length=16)
+    diners: str = Field("1", max_length=4)
+    seed: str = Field(str(DEFAULTS.seed), max_length=12)
+    simulator: str = Field(DEFAULTS.simulator, max_length=32)
+    preferences: str = Field("", max_length=4000)
+    #: ``on``: the LLM may add what the request leaves out (the API's ``guess``).
+    guess: str = Field("on" if DEFAULTS.guess else "off", max_length=3)
+
+
 def _check_origin(request: Request) -> None:
     """Refuse a form posted from another site, or with no Origin to tell."""
     if not same_origin(request.headers.get("origin"), request.headers.get("host")):
@@ -172,7 +181,7 @@ def _body(action: str, fields: dict[str, str]) -> tuple[str, ArrangeBody | PlanB
     prefs = [line.strip() for line in fields["preferences"].splitlines() if line.strip()]
     common: dict[str, Any] = {"request": fields["request"].strip(), "table": table,
                               "preferences": prefs, "seed": int(number("seed", fields["seed"])),
-                              "llm": fields["llm"] or None}
+                              "llm": fields["llm"] or None, "guess": fields["guess"] != "off"}
     if action == "arrange":
         # One diner is the form's default, "as the request says"; any other count goes to
         # the API's body, which refuses 0, -1 or 2.5 in its own words.
@@ -190,7 +199,8 @@ def _form(values: Any) -> dict[str, str]:
     """The form's fields, as given or by default."""
     defaults = {"request": "", "llm": "", "shape": "rectangle", "width_cm": "90",
                 "depth_cm": "60", "diners": "1", "seed": str(DEFAULTS.seed),
-                "simulator": DEFAULTS.simulator, "preferences": ""}
+                "simulator": DEFAULTS.simulator, "preferences": "",
+                "guess": "on" if DEFAULTS.guess else "off"}
     return {k: str(values.get(k, v) or v) if k != "request" else str(values.get(k, v))
             for k, v in defaults.items()}
 
@@ -204,7 +214,8 @@ def _fields(job: Job) -> dict[str, str]:
             "shape": table.get("shape", "rectangle"), "width_cm": f"{size[0] * 100:g}",
             "depth_cm": f"{size[1] * 100:g}", "diners": str(b.get("diners") or 1),
             "seed": str(b.get("seed", 0)), "simulator": b.get("simulator", DEFAULTS.simulator),
-            "preferences": "\n".join(b.get("preferences") or [])}
+            "preferences": "\n".join(b.get("preferences") or []),
+            "guess": "off" if b.get("guess") is False else "on"}
 
 
 def _result(service: Service, job: Job) -> dict[str, Any]:
@@ -217,6 +228,10 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
                            "summary": None}
     result = job.result or {}
 
+    def web(doc: ArrangementDoc) -> ArrangementDoc:
+        # Its warnings name the playground's own controls, not the API's parameters.
+        return doc.model_copy(update={"warnings": [words(w, "web") for w in doc.warnings]})
+
     def picture(name: str, alt: str, caption: str, phone: str | None = None) -> None:
         if name in files:
             out["pictures"].append({"url": url + name, "alt": alt, "caption": caption,
@@ -224,7 +239,7 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
                                     "phone": url + phone if phone in files else None})
 
     if job.kind == "arrange" and "arrangement" in result:
-        out["arrangement"] = doc = ArrangementDoc.model_validate(result["arrangement"])
+        out["arrangement"] = doc = web(ArrangementDoc.model_validate(result["arrangement"]))
         diners = len(doc.table.diners or ()) or 1
         where = "the diner sits at the bottom" if diners == 1 else \
             f"{diners} diners, each drawn at their seat and labelled"
@@ -232,7 +247,7 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
                 f"The arrangement, from above ({where})", "table_phone.png")
     elif job.kind == "plan" and "plan" in result:
         plan = result["plan"]
-        out["arrangement"] = ArrangementDoc.model_validate(plan["arrangement"])
+        out["arrangement"] = web(ArrangementDoc.model_validate(plan["arrangement"]))
         s = plan["plan"]
         out["summary"] = (f"{len(plan['steps'])} steps; expected utility "
                           f"{s['expected_utility']:.1f} s, expected duration "
@@ -242,7 +257,7 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
                 "table_phone.png")
     elif job.kind == "run" and "run" in result:
         run = result["run"]
-        out["arrangement"] = ArrangementDoc.model_validate(run["planned"])
+        out["arrangement"] = web(ArrangementDoc.model_validate(run["planned"]))
         out["summary"] = (f"{'success' if run['success'] else 'failed'}: execution "
                           f"{run['execution_time_s']:.1f} s, {run['failures']} failed "
                           f"actions, in {run['simulator']}")

@@ -63,6 +63,8 @@ def label(name: str, where: Interface, value: object = None) -> str:
         return d.sweep or name if value is None else f"{d.sweep or name} {value}"
     if where == "json":
         return d.json or name
+    if where == "web":
+        return d.web or f'"{d.json or name}"'
     if value is None:
         return name
     return f"{name}={value if isinstance(value, int | float) else str(value)!r}"
@@ -88,6 +90,9 @@ def words(text: str, where: Interface, names: tuple[str, ...] | None = None) -> 
             return m.group(0)
         if where == "json":
             return f'"{label(name, where)}": {_JSON_LITERALS.get(value, value)}'
+        if where == "web":
+            return label(name, where) if door(name).web else \
+                f'"{label(name, "json")}": {_JSON_LITERALS.get(value, value)}'
         if where == "sweep":
             return f"{label(name, where)}: {value}"
         return label(name, where, value)

@@ -22,7 +22,7 @@ from llm_grop.errors import BadInput
 from llm_grop.settings.reasons import problem, unknown_words
 
 #: The front doors a setting comes through; each names a field its own way.
-Interface = Literal["python", "cli", "sweep", "json"]
+Interface = Literal["python", "cli", "sweep", "json", "web"]
 
 #: How MuJoCo's hand holds an object: ``fix``, a weld that attaches only on a squeezing
 #: grip (Gazebo's grasp-fix), or ``friction``, contact friction alone.
@@ -41,7 +41,8 @@ class Door:
     to false (``--no-guess`` for ``guess``), ``sweep``: a sweep file's key path
     (``llm.backend``), ``json``: the service's JSON field, ``metavar``: the flag's
     placeholder, ``path``: the value names a ``file`` or a ``dir``, ``cli_help``: the
-    flag's help where the record's own words name Python's values.
+    flag's help where the record's own words name Python's values, ``web``: what a user of
+    the playground does to give the value a message mentions (its own control).
     """
 
     cli: str | None = None
@@ -52,6 +53,7 @@ class Door:
     metavar: str | None = None
     path: Literal["file", "dir"] | None = None
     cli_help: str | None = None
+    web: str | None = None
 
 
 def setting(default: Any, help: str, *, group: str, door: Door | None = None,
@@ -171,7 +173,8 @@ class RunSettings(BaseModel):
     guess: bool = setting(
         True, "Refuse a request the LLM would have to complete: objects it does not name "
               "(a meal, 'coffee'), or how many.", group="guess",
-        door=Door(negate="--no-guess"))
+        door=Door(negate="--no-guess",
+                  web='the "refuse the request" choice for the objects a request leaves out'))
 
     # The task-motion planner (paper §III-C)
     weight: float = setting(
