@@ -42,7 +42,7 @@ DEFAULT_DIR = Path("~/.cache/llm-grop/llm-calls")
 #: The environment variable that moves the default directory.
 ENV_DIR = "LLM_GROP_CACHE_DIR"
 #: Bytes an entry may hold besides its answer: its key, prompt and schema.
-_ENTRY_OVERHEAD_BYTES = 4 * 1024 * 1024
+_ENTRY_OVERHEAD_BYTES = 4_194_304  # 4 MiB
 #: Bumped when the key's meaning changes, so older entries are never read as newer ones.
 _FORMAT = 1
 

@@ -28,20 +28,14 @@ llama.cpp server) through the official ``openai`` SDK.
 
 from __future__ import annotations
 
-import contextlib
-import datetime
-import email.utils
 import json
 import math
 import os
 import random
-import re
-import socket
 import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from types import ModuleType
 from typing import Any
 
 import httpx
@@ -49,6 +43,15 @@ import openai
 
 from llm_grop.errors import LLMAnswerUnusable, LLMError, LLMTransient, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, BaseLLM, SamplingParams
+from llm_grop.llm.openai_wire import (
+    HTTP_ERRORS,
+    TIMEOUTS,
+    Cutoff,
+    detail,
+    one_line,
+    retry_after_s,
+    root_cause,
+)
 from llm_grop.llm.record import LLMCallRecord
 
 #: The model used when ``BackendOptions.model`` is ``None``.
@@ -56,28 +59,6 @@ DEFAULT_MODEL = "gpt-4o-mini"
 
 #: The API key sent when none is configured; local servers ignore it.
 PLACEHOLDER_API_KEY = "not-needed"
-
-#: Longest server error text quoted in an error message, in characters.
-_MAX_DETAIL = 200
-
-_ERRNO_PREFIX = re.compile(r"^\[Errno -?\d+\]\s*")
-
-
-
-def _http_modules() -> tuple[ModuleType, ...]:
-    """The HTTP client libraries the SDK may speak through: httpx, and httpx2 (a fork
-    with its own exception classes) that newer ``openai`` releases use."""
-    try:
-        import httpx2
-    except ImportError:
-        return (httpx,)
-    return (httpx, httpx2)
-
-
-#: A timeout, and any failure, of the HTTP client while an answer is read.
-_TIMEOUTS: tuple[type[Exception], ...] = tuple(m.TimeoutException for m in _http_modules())
-_HTTP_ERRORS: tuple[type[Exception], ...] = tuple(m.HTTPError for m in _http_modules())
-
 
 @dataclass(frozen=True)
 class OpenAIOptions:
@@ -130,7 +111,7 @@ class OpenAILLM(BaseLLM):
                                  "response": [self._read_other_body]}),
             )
         except (openai.OpenAIError, ValueError, TypeError) as exc:
-            raise LLMUnavailable(f"openai backend: cannot configure the client: {_one_line(exc)}"
+            raise LLMUnavailable(f"openai backend: cannot configure the client: {one_line(exc)}"
                                  ) from None
         #: The endpoint in use, without a trailing slash.
         self.base_url: str = str(self._client.base_url).rstrip("/")
@@ -173,13 +154,13 @@ class OpenAILLM(BaseLLM):
                 raise self._unavailable(exc) from None
             except (ValueError, RecursionError) as exc:
                 raise LLMTransient(f"openai backend: unreadable answer from {self.base_url}: "
-                                   f"{_one_line(exc)}") from None
+                                   f"{one_line(exc)}") from None
         except openai.OpenAIError as exc:
             raise self._unavailable(exc) from None
         except (ValueError, RecursionError) as exc:
             # A 200 answer whose body is not JSON.
             raise LLMTransient(f"openai backend: unreadable answer from {self.base_url}: "
-                                 f"{_one_line(exc)}") from None
+                                 f"{one_line(exc)}") from None
         else:
             if "response_format" in kwargs:
                 self.structured_output = True
@@ -223,7 +204,7 @@ class OpenAILLM(BaseLLM):
             raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
         # httpx's timeouts bound each read, so a server that trickles its headers a byte
         # at a time would hold the call for ever: at the deadline the socket is shut.
-        cutoff = self._call.cutoff = _Cutoff()
+        cutoff = self._call.cutoff = Cutoff()
         timer = threading.Timer(remaining, cutoff.cut)
         timer.daemon = True
         timer.start()
@@ -251,12 +232,12 @@ class OpenAILLM(BaseLLM):
                         if time.monotonic() > deadline:
                             raise openai.APITimeoutError(request=None)  # type: ignore[arg-type]
                         chunks.append(chunk)
-                except _TIMEOUTS:
+                except TIMEOUTS:
                     raise openai.APITimeoutError(request=None) from None  # type: ignore[arg-type]
-                except _HTTP_ERRORS as exc:
+                except HTTP_ERRORS as exc:
                     # The connection broke in the middle of the answer: as if it never came.
                     raise openai.APIConnectionError(
-                        message=_one_line(exc),
+                        message=one_line(exc),
                         request=httpx.Request("POST", self.base_url)) from None
         except openai.APIConnectionError as exc:
             # SDKs before 2.31 wrap an error raised in a response hook (:meth:`_read_other_
@@ -303,7 +284,7 @@ class OpenAILLM(BaseLLM):
         response = getattr(exc, "response", None)
         headers = getattr(response, "headers", None) or {}
         for name, scale in (("retry-after-ms", 0.001), ("retry-after", 1.0)):
-            wait = _seconds(headers.get(name), scale)
+            wait = retry_after_s(headers.get(name), scale)
             if wait is not None:
                 return wait
         return min(0.5 * 2 ** attempt, 8.0) * self._jitter.uniform(0.75, 1.0)
@@ -348,77 +329,29 @@ class OpenAILLM(BaseLLM):
             return LLMTransient(f"openai backend: cannot reach {where} ({reason})")
         if isinstance(exc, openai.APIConnectionError):
             return LLMTransient(f"openai backend: cannot reach {where} "
-                                  f"({_root_cause(exc)}){self._after_retries()}")
+                                  f"({root_cause(exc)}){self._after_retries()}")
         if isinstance(exc, openai.AuthenticationError):
             return LLMUnavailable(f"openai backend: the API key was refused by {where} (401: "
-                                  f"{_detail(exc)}); set OPENAI_API_KEY or pass an api_key")
+                                  f"{detail(exc)}); set OPENAI_API_KEY or pass an api_key")
         if isinstance(exc, openai.PermissionDeniedError):
             return LLMUnavailable(f"openai backend: the API key may not use model {self.model!r} "
-                                  f"at {where} (403: {_detail(exc)})")
+                                  f"at {where} (403: {detail(exc)})")
         if isinstance(exc, openai.NotFoundError):
             return LLMUnavailable(f"openai backend: model {self.model!r} not found at {where} "
-                                  f"(404: {_detail(exc)}); check the model name and base URL")
+                                  f"(404: {detail(exc)}); check the model name and base URL")
         if isinstance(exc, openai.APIStatusError):
             status = exc.status_code
             transient = status in (408, 409, 429) or status >= 500
             kind = LLMTransient if transient else LLMUnavailable
             return kind(f"openai backend: {where} answered {status} "
-                        f"({_detail(exc)}){self._after_retries() if transient else ''}")
-        return LLMUnavailable(f"openai backend: unexpected answer from {where}: {_one_line(exc)}")
+                        f"({detail(exc)}){self._after_retries() if transient else ''}")
+        return LLMUnavailable(f"openai backend: unexpected answer from {where}: {one_line(exc)}")
 
     def _after_retries(self) -> str:
         n = self._max_retries
         if n == 0:
             return " (retries disabled)"
         return f" after {n} {'retry' if n == 1 else 'retries'}"
-
-
-def _seconds(value: str | None, scale: float) -> float | None:
-    """A Retry-After value in seconds: a number (times ``scale``) or an HTTP date (UTC if
-    it names no zone); ``None`` for anything else, which is ignored."""
-    if not value:
-        return None
-    try:
-        wait = float(value) * scale
-    except ValueError:
-        try:
-            when = email.utils.parsedate_to_datetime(value)
-        except (TypeError, ValueError, IndexError):
-            return None
-        if when.tzinfo is None:
-            when = when.replace(tzinfo=datetime.UTC)
-        wait = when.timestamp() - time.time()
-    return max(wait, 0.0) if math.isfinite(wait) else None
-
-
-class _Cutoff:
-    """One attempt's socket and whether its deadline passed: :meth:`cut`, called at the
-    deadline from a timer's thread, shuts the socket down so that a read blocked on it
-    ends, whatever the server is sending."""
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._sock: socket.socket | None = None
-        self.fired = False
-
-    def watch(self, sock: socket.socket | None) -> None:
-        """The attempt's socket, once connected (shut at once if the deadline passed)."""
-        with self._lock:
-            self._sock = sock
-            if self.fired:
-                _shut(sock)
-
-    def cut(self) -> None:
-        """The deadline passed."""
-        with self._lock:
-            self.fired = True
-            _shut(self._sock)
-
-
-def _shut(sock: socket.socket | None) -> None:
-    if sock is not None:
-        with contextlib.suppress(OSError):
-            sock.shutdown(socket.SHUT_RDWR)
 
 
 class _TooLarge(openai.OpenAIError):
@@ -434,33 +367,3 @@ class _PastDeadline(openai.OpenAIError):
     def __init__(self, cause: openai.OpenAIError, wait_s: float) -> None:
         super().__init__(str(cause))
         self.cause, self.wait_s = cause, wait_s
-
-
-def _root_cause(exc: BaseException) -> str:
-    """The innermost cause's message, e.g. ``connection refused``."""
-    inner: BaseException = exc
-    for _ in range(20):
-        nxt = inner.__cause__ or inner.__context__
-        if nxt is None:
-            break
-        inner = nxt
-    text = _ERRNO_PREFIX.sub("", _one_line(inner)) or type(inner).__name__
-    return text[:1].lower() + text[1:]
-
-
-def _detail(exc: openai.APIStatusError) -> str:
-    """The server's own error message, shortened to one line."""
-    body = exc.body
-    message: object = None
-    if isinstance(body, dict):
-        # The SDK hands over the "error" object of {"error": {"message": ...}} bodies.
-        inner = body.get("error", body)
-        message = inner.get("message") if isinstance(inner, dict) else inner
-    if not isinstance(message, str) or not message.strip():
-        message = exc.message
-    return _one_line(str(message))
-
-
-def _one_line(obj: object) -> str:
-    text = " ".join(str(obj).split())
-    return text if len(text) <= _MAX_DETAIL else text[: _MAX_DETAIL - 1] + "…"
