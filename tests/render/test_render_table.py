@@ -171,3 +171,30 @@ def test_relation_labels_are_the_relations_table_names_shortened() -> None:
     assert set(before) <= set(MEANINGS)
     labels = [relation_label(name) for name in MEANINGS]
     assert len(set(labels)) == len(labels)
+
+
+def _label_boxes(arrangement: Arrangement, size_in: tuple[float, float]) -> list:
+    """The pixel boxes of the object names in the picture ``draw_arrangement`` makes."""
+    from matplotlib.text import Text
+
+    from llm_grop.render.table import _figure
+
+    fig = _figure(arrangement, None, False, size_in)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    names = {p.name for p in arrangement.placements}
+    texts = [t for t in fig.axes[0].findobj(Text) if t.get_text() in names]
+    assert len(texts) == len(names)
+    return [t.get_bbox_patch().get_window_extent(renderer) for t in texts]
+
+
+@pytest.mark.parametrize("size", ["desktop", "phone"])
+def test_names_of_objects_lying_close_together_stay_apart(size: str) -> None:
+    from llm_grop.render.table import PHONE_SIZE_IN
+
+    breads = [placement(f"bread {k}" if k else "bread", -0.05 + 0.035 * k, 0.15 + 0.01 * k,
+                        "box", (0.1, 0.06)) for k in range(4)]
+    arrangement = Arrangement("breakfast for two", Table(), (PLATE, *breads))
+    boxes = _label_boxes(arrangement, PHONE_SIZE_IN if size == "phone" else FIGSIZE_IN)
+    overlaps = [(a, b) for i, a in enumerate(boxes) for b in boxes[i + 1:] if a.overlaps(b)]
+    assert not overlaps

@@ -20,11 +20,13 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Patch, Rectangle, Wedge
+from matplotlib.text import Text
 from matplotlib.ticker import FuncFormatter, MultipleLocator
 from matplotlib.transforms import offset_copy
 
 from llm_grop.errors import BadInput
 from llm_grop.figures import BACKGROUND, DPI, STYLE, save_png
+from llm_grop.render.labels import separate
 from llm_grop.world.arrangement import Arrangement, Placement
 from llm_grop.world.kind_colors import TABLE_TOP, kind_color
 from llm_grop.world.relation import CENTER, STACKING
@@ -115,10 +117,13 @@ def draw_table_on(ax: Axes, arrangement: Arrangement, *, show_relations: bool = 
                    key=lambda i: stacks[arrangement.placements[i].name][0])
     colors = kind_colors(arrangement.placements)
     levels: dict[str, int] = {}
+    names: list[Text] = []
     for i in order:
         p = arrangement.placements[i]
         depth, root = stacks[p.name]
-        _draw_object(ax, p, depth, colors[p.kind or p.name], compact)
+        name = _draw_object(ax, p, depth, colors[p.kind or p.name], compact)
+        if name is not None:
+            names.append(name)
         if depth > 0:
             # Labels of one stack are put one above the other, next to the stack.
             _label_stacked(ax, p, by_name[root], levels.get(root, 0), compact)
@@ -126,6 +131,7 @@ def draw_table_on(ax: Axes, arrangement: Arrangement, *, show_relations: bool = 
     if show_relations:
         _draw_relations(ax, arrangement, compact)
     _set_limits(ax, arrangement, compact)
+    separate(ax, names)
 
 
 def _draw_diner(ax: Axes, seat: Seat, label: str, compact: bool = False) -> None:
@@ -174,7 +180,10 @@ def _half_extent_y(p: Placement) -> float:
     return abs(sx / 2 * math.sin(p.yaw)) + abs(sy / 2 * math.cos(p.yaw))
 
 
-def _draw_object(ax: Axes, p: Placement, depth: int, color: str, compact: bool = False) -> None:
+def _draw_object(ax: Axes, p: Placement, depth: int, color: str, compact: bool = False
+                 ) -> Text | None:
+    """Draw ``p`` and, unless it is stacked (labelled beside its stack), its name: the
+    name's text."""
     stacked = depth > 0
     # A stacked object is see-through with a dashed, opaque outline, so both it and
     # its support stay visible.
@@ -194,9 +203,10 @@ def _draw_object(ax: Axes, p: Placement, depth: int, color: str, compact: bool =
         if p.shape == "box" and sy > 1.5 * sx:
             rotation = (math.degrees(p.yaw) + 90.0) % 180.0  # along the long side, upright
             rotation = rotation - 180.0 if rotation > 90.0 else rotation
-        ax.text(p.x, p.y, p.name, ha="center", va="center", fontsize=_small(7, compact),
-                rotation=rotation,
-                rotation_mode="anchor", bbox=_LABEL_BOX, zorder=10)
+        return ax.text(p.x, p.y, p.name, ha="center", va="center",
+                       fontsize=_small(7, compact), rotation=rotation, rotation_mode="anchor",
+                       bbox=_LABEL_BOX, zorder=10)
+    return None
 
 
 def _label_stacked(ax: Axes, p: Placement, root: Placement, level: int,
