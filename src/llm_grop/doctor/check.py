@@ -46,7 +46,12 @@ def report_line(check: Check, name_width: int = NAME_WIDTH) -> str:
 def python_shown() -> str:
     """This interpreter as a user would type it: relative to the working directory when
     inside it (``.venv/bin/python``), else its absolute path."""
-    path = Path(sys.executable)
+    return shown_path(Path(sys.executable))
+
+
+def shown_path(path: Path) -> str:
+    """``path`` as a user would type it: relative to the working directory when inside it,
+    else absolute."""
     try:
         shown = str(path.relative_to(Path.cwd()))
     except ValueError:

@@ -15,7 +15,7 @@ from pathlib import Path
 from packaging.requirements import InvalidRequirement, Requirement
 from packaging.specifiers import SpecifierSet
 
-from llm_grop.doctor.check import Check, Status, one_line, pip_command, python_shown
+from llm_grop.doctor.check import Check, Status, one_line, pip_command, python_shown, shown_path
 
 #: The distribution whose metadata says what llm-grop needs.
 DISTRIBUTION = "llm-grop"
@@ -61,7 +61,7 @@ def check_model_file(package: str, file: str) -> Check:
         with resources.as_file(resource) as path, open(path, "rb") as handle:
             magic = handle.read(len(_GGUF_MAGIC))
             size_mb = os.fstat(handle.fileno()).st_size / 1e6
-            where = str(path)
+            where = shown_path(Path(path))
     except OSError as exc:
         return Check("embedded model", Status.FAIL, f"{file} in {distribution}: "
                      f"{exc.strerror or exc}", fix)
