@@ -11,7 +11,7 @@ import httpx
 import jsonschema
 import pytest
 
-from service_support import Server, wait_done
+from service_support import Server, start_server, wait_done
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMAS = ROOT / "docs" / "schema"
@@ -313,3 +313,18 @@ def test_the_playground_words_warnings_with_its_own_controls() -> None:
         '2 bread; the "refuse the request" choice for the objects a request leaves out '
         "refuses this")
     assert words("m=0 is too few", "web") == '"m": 0 is too few'
+
+
+def test_serve_offers_what_llm_auto_finds_at_start(tmp_path: Path, chat_server,
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    port = chat_server.url.split(":")[2].split("/")[0]
+    monkeypatch.setenv("LLM_GROP_PROBE_PORTS", port)
+    s = start_server(tmp_path / "jobs.sqlite", "--llm", "auto")
+    try:
+        with s.client() as c:
+            assert c.get("/v1/info").json()["backends"] == ["replay", "openai"]
+    finally:
+        s.stop()
+    log = (tmp_path / "jobs.sqlite.log").read_text()
+    assert f"--llm auto: using openai local-model: a server answered on 127.0.0.1:{port}" \
+        in log

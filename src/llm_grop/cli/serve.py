@@ -46,7 +46,8 @@ def _default_db() -> Path:
               help="Port to bind (0: any free one).")
 @click.option("--llm", "backends", multiple=True, default=("embedded",), show_default=True,
               help="An LLM backend clients may choose by name (repeatable; the first is the "
-                   "default): embedded, openai, replay, or a plugin's.")
+                   "default): embedded, openai, replay, auto (what `--llm auto` finds when "
+                   "the server starts), or a plugin's.")
 @flags(*(f for f in LLM_FIELDS if f != "llm"))
 @click.option("--workers", default=2, show_default=True, type=click.IntRange(1, 64),
               help="Worker processes that run jobs.")
@@ -94,22 +95,30 @@ def serve(host: str, port: int, backends: tuple[str, ...], replay: Path | None,
     from llm_grop.service.config import Backend, Limits, ServiceConfig, check_bind
 
     check_bind(host, token)
-    names = [BACKENDS.key(b) for b in dict.fromkeys(backends)]
+    from llm_grop.assembly import AUTO, backend_options, resolve_llm
+
+    settings = from_flags(flags, replay=replay.absolute() if replay else None)
+    # ``auto`` is resolved once, at start: the server offers what it found, by name.
+    built = {}
+    for given in dict.fromkeys(backends):
+        made = settings
+        if given == AUTO:
+            made, choice = resolve_llm(settings.with_values(llm=AUTO))
+            click.echo(f"llm-grop serve: --llm auto: {choice.note if choice else ''}")
+        built.setdefault(BACKENDS.key(made.llm if given == AUTO else given), made)
+    names = list(built)
     if "replay" in names and replay is None:
         raise BadInput("needs --replay FILE, a JSONL file of recorded calls", param="llm",
                        value="replay")
     if replay is not None and not replay.is_file():
         raise BadInput("no such file", param="replay", value=replay)
-    from llm_grop.assembly import backend_options
     from llm_grop.llm.registry import backend_options_class
     from llm_grop.settings.declared import declared_options
 
-    settings = from_flags(flags, replay=replay.absolute() if replay else None)
-    options = backend_options(settings)
     # Each backend offered takes --llm-option, checked against what it declares.
-    offered = tuple(Backend(n, replace(options, own=declared_options(
-        backend_options_class(n), dict(settings.backend_options),
-        owner=f"LLM backend {n!r}", param="backend_options"))) for n in names)
+    offered = tuple(Backend(n, replace(backend_options(made), own=declared_options(
+        backend_options_class(n), dict(made.backend_options),
+        owner=f"LLM backend {n!r}", param="backend_options"))) for n, made in built.items())
     db = (db or _default_db()).expanduser().absolute()
     check_out_dir("db", db.parent)
     db.parent.mkdir(parents=True, exist_ok=True)  # checked above: it can be made
