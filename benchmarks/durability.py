@@ -30,7 +30,7 @@ from pathlib import Path
 import httpx
 from common import RECORDING, parse_args
 
-from llm_grop.errors import LLMTransient, LLMUnavailable
+from llm_grop.errors import LLMError, LLMTransient
 from llm_grop.llm.base import BackendOptions, SamplingParams
 from llm_grop.llm.openai_backend import OpenAILLM
 
@@ -85,7 +85,7 @@ def llm_calls(timeout_s: float) -> None:
         try:
             llm.complete("hi", SamplingParams(seed=0))
             ending = "answered"
-        except (LLMUnavailable, LLMTransient) as exc:
+        except (LLMError, LLMTransient) as exc:
             ending = str(exc).split(": ", 1)[1][:110]
         print(f"  {mode:12s} {time.monotonic() - t0:6.2f} s  {ending}")
         server.shutdown()
