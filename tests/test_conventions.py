@@ -90,7 +90,9 @@ def test_api_errors_name_the_api_parameters(call, message: str) -> None:
 ])
 def test_the_command_line_names_its_flags(argv: list[str], line: str, tmp_path, capsys) -> None:
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
-    assert main([*argv, "--llm", "replay", "--replay", "/dev/null", "-q"]) == 2
+    empty = tmp_path / "calls.jsonl"  # an empty recording: no model is loaded
+    empty.touch()
+    assert main([*argv, "--llm", "replay", "--replay", str(empty), "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"llm-grop: error: {line}") and "\n" not in err
 

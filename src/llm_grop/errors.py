@@ -85,10 +85,10 @@ class LLMUnavailable(LLMError):
 
 
 class LLMAnswerUnusable(LLMError):
-    """The LLM answered, but nothing usable: an answer over ``max_answer_bytes``, or
-    answers with no readable relation after every attempt. A single run stops on it (bad
-    input, exit 2); a bench keeps the trial as ``llm-failed`` and goes on, since another
-    answer may be usable."""
+    """The LLM answered, but nothing usable: an answer over ``max_answer_bytes``, JSON
+    with no reply in it, or answers with no readable relation after every attempt. A
+    single run stops on it (bad input, exit 2); a bench keeps the trial as ``llm-failed``
+    and goes on, since another answer may be usable."""
 
 
 class LLMTransient(LLMGropError):

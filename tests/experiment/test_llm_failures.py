@@ -78,3 +78,56 @@ def test_an_oversized_or_unreadable_answer_is_a_failed_trial_not_a_stop(
     rows = _rows(out)
     assert len(rows) == 8 and {r["status"] for r in rows} == {"llm-failed"}
     assert all(reason in r["reason"] for r in rows)
+
+
+def _setup_no_reply(server) -> None:
+    server.raw.extend([b'{"choices": []}'] * 1000)
+
+
+def _setup_garbled(server) -> None:
+    server.raw.extend([b"<html>502 Bad Gateway</html>"] * 1000)
+
+
+def _setup_silent(server) -> None:
+    server.delay_s = 4.0  # past --timeout 1
+
+
+@pytest.mark.parametrize(("setup", "reason"), [
+    (_setup_no_reply, "malformed answer from"),
+    (_setup_garbled, "unreadable answer from"),
+    (_setup_silent, "no answer within the 1 s deadline"),
+], ids=["JSON without a reply", "no JSON", "past --timeout"])
+def test_every_answer_a_retry_may_cure_is_a_failed_trial(chat_server, tmp_path: Path, setup,
+                                                         reason: str) -> None:
+    """A bench on the 2D simulator and the local executor, against a server that answers
+    200 with no reply, 200 with no JSON, or nothing within --timeout: every trial is an
+    llm-failed row with the reason, the bench goes on to the end, and a rerun against a
+    mended server finishes them."""
+    setup(chat_server)
+    out = tmp_path / "bench"
+    args = ["--trials", "2", "--timeout", "1", "--executor", "local",
+            "--simulator", "kinematic2d"]
+    assert _bench(chat_server, out, *args) == 0
+    rows = _rows(out)
+    assert len(rows) == 4 and {r["status"] for r in rows} == {"llm-failed"}
+    assert all(reason in r["reason"] for r in rows), [r["reason"] for r in rows]
+
+    chat_server.raw.clear()
+    chat_server.delay_s = 0.0
+    chat_server.reply = scripted([TASK1_GOOD])
+    assert _bench(chat_server, out, *args) == 0
+    assert {r["status"] for r in _rows(out)} == {"ok"}
+
+
+def test_a_request_the_server_refuses_stops_the_bench(chat_server, tmp_path: Path,
+                                                      capsys) -> None:
+    """A 4xx other than 408, 409 and 429 (here 400, as for a prompt over the model's
+    context) refuses the request itself: asking again gets the same, so the bench stops
+    with bad input (2), as the README lists."""
+    chat_server.plan.extend([400] * 1000)
+    out = tmp_path / "refused"
+    assert _bench(chat_server, out, "--executor", "local") == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"llm-grop: error: openai backend: {chat_server.url} answered 400 "
+                   "(planned failure 400)")
+    assert not (out / "trials.jsonl").exists() or not _rows(out)

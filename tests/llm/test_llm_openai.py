@@ -172,14 +172,28 @@ def test_other_api_error_gives_status_and_message(chat_server: ChatServer) -> No
                                   b'{"choices": [{"index": 0}]}', b'{"choices": "x"}'])
 def test_malformed_answer_is_one_line(chat_server: ChatServer, body: bytes) -> None:
     chat_server.raw = deque([body])
-    # Text that is no JSON is garbled on the way (transient); JSON without a reply is not.
-    kind = LLMTransient if body == b"not json" else LLMUnavailable
+    # Text that is no JSON is garbled on the way (transient); JSON without a reply is an
+    # unusable answer, which a bench keeps as a failed trial (the next may be whole), not
+    # a lasting fault of the configuration.
+    kind = LLMTransient if body == b"not json" else LLMAnswerUnusable
     with pytest.raises(kind) as caught:
         make(chat_server).complete("hi", PARAMS)
+    assert not isinstance(caught.value, LLMUnavailable)
     message = str(caught.value)
     assert message.startswith("openai backend: ")
     assert "answer from " + chat_server.url in message
     assert "\n" not in message
+
+
+@pytest.mark.parametrize("body", [b'{"error": {"message": "upstream\\nbusy"}}',
+                                  b'{"error": "upstream busy"}'])
+def test_an_error_in_a_200_answer_is_quoted(chat_server: ChatServer, body: bytes) -> None:
+    chat_server.raw = deque([body])
+    with pytest.raises(LLMAnswerUnusable) as caught:
+        make(chat_server).complete("hi", PARAMS)
+    assert str(caught.value) == (f"openai backend: malformed answer from {chat_server.url}: "
+                                 "no text in choices[0].message.content (the server said: "
+                                 "upstream busy)")
 
 
 def test_answer_without_usage_has_no_token_counts(chat_server: ChatServer) -> None:

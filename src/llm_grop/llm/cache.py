@@ -25,14 +25,13 @@ import json
 import logging
 import os
 import secrets
-import stat
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from llm_grop.errors import LLMError
-from llm_grop.llm.record import LLMCallRecord, record_from_dict
+from llm_grop.llm.record import LLMCallRecord, open_regular, record_from_dict
 from llm_grop.settings import DEFAULTS
 
 log = logging.getLogger(__name__)
@@ -121,18 +120,15 @@ class LLMCache:
         except FileNotFoundError:
             return None
         except (OSError, ValueError, LLMError) as exc:
-            log.warning("LLM cache: ignoring bad entry %s (%s); asking again", path, exc)
+            log.warning("LLM cache: ignoring bad entry %s (%s); asking again", path,
+                        getattr(exc, "strerror", None) or exc)
             return None
         return replace(record, cached=True)
 
     def _read(self, path: Path) -> str:
         """The text of the entry at ``path``, which must be a regular file of a bounded
         size: its prompt, its key and an answer within the cap."""
-        # O_NONBLOCK: opening a FIFO for reading would wait for a writer.
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
-        with os.fdopen(fd, "rb") as f:
-            if not stat.S_ISREG(os.fstat(fd).st_mode):
-                raise ValueError("not a regular file")
+        with open(open_regular(path, os.O_RDONLY, follow=False), "rb") as f:
             # Room for the key (which holds the prompt twice) beside the answer.
             limit = self.max_answer_bytes + _ENTRY_OVERHEAD_BYTES
             data = f.read(limit + 1)

@@ -38,7 +38,7 @@ from pydantic import Field
 
 from llm_grop.errors import BadInput, LLMError, LLMUnavailable
 from llm_grop.llm.base import BackendOptions, BaseLLM, SamplingParams
-from llm_grop.llm.record import LLMCallRecord
+from llm_grop.llm.record import LLMCallRecord, NotRegularFile, check_regular
 
 if TYPE_CHECKING:
     from llama_cpp import Llama, LlamaGrammar
@@ -89,8 +89,18 @@ class EmbeddedLLM(BaseLLM):
         self._custom_path: Path | None = None
         if options.model is not None and options.model != DEFAULT_MODEL:
             path = Path(options.model).expanduser()
-            if not path.is_file():
-                raise LLMUnavailable(f"embedded backend: model file {str(path)!r} not found")
+            try:
+                # A FIFO or a device would hold llama.cpp's reader, which nothing stops.
+                check_regular(path)
+            except FileNotFoundError:
+                raise LLMUnavailable(f"embedded backend: model file {str(path)!r} not found"
+                                     ) from None
+            except NotRegularFile as exc:
+                raise LLMUnavailable(f"embedded backend: model file {str(path)!r} is "
+                                     f"{exc.strerror}") from None
+            except OSError as exc:
+                raise LLMUnavailable(f"embedded backend: cannot read model file "
+                                     f"{str(path)!r} ({exc.strerror or exc})") from None
             self._custom_path = path
         self.model: str = self._custom_path.stem if self._custom_path else DEFAULT_MODEL
         self._n_threads = options.n_threads or os.cpu_count() or 1

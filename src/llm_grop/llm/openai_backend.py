@@ -9,10 +9,11 @@ llama.cpp server) through the official ``openai`` SDK.
   :data:`PLACEHOLDER_API_KEY`, which local servers accept and OpenAI refuses (401).
 - Model: ``BackendOptions.model``, else :data:`DEFAULT_MODEL`.
 - A deadline: ``BackendOptions.timeout_s`` bounds the whole call, every attempt, the
-  reading of each answer (an error's or a redirect's too) and the waits between attempts
-  included, so a server that trickles its answer a byte at a time, or asks to be retried
-  much later, cannot hold a run longer than that. Only its headers are bounded per read
-  (``timeout_s`` each), as httpx bounds them.
+  reading of each answer's headers and body (an error's or a redirect's too) and the
+  waits between attempts included, so a server that trickles its headers or its answer a
+  byte at a time, says nothing, or asks to be retried much later, cannot hold a run
+  longer than that: at the deadline the attempt's socket is shut (:class:`Cutoff`),
+  whatever is being read, and a wait that would pass it is not waited for.
 - Retries: connection errors, 408, 409, 429 and 5xx answers are retried up to
   ``max_retries`` times with exponential backoff (0.5 s doubling to at most 8 s, with
   jitter), honouring the server's ``retry-after-ms`` and ``retry-after`` headers, as
@@ -297,8 +298,13 @@ class OpenAILLM(BaseLLM):
             if text is not None and not isinstance(text, str):
                 raise TypeError(type(text))
         except (AttributeError, IndexError, KeyError, TypeError):
-            raise LLMUnavailable(f"openai backend: malformed answer from {self.base_url}: "
-                                 f"no text in choices[0].message.content") from None
+            # A proxy or a busy server may say 200 and put its error in the body; the next
+            # answer may be whole, so a bench keeps the trial as failed and goes on.
+            said = _said(response)
+            raise LLMAnswerUnusable(f"openai backend: malformed answer from {self.base_url}: "
+                                    "no text in choices[0].message.content"
+                                    + (f" (the server said: {said})" if said else "")
+                                    ) from None
         usage = response.get("usage") if isinstance(response, dict) else None
         usage = usage if isinstance(usage, dict) else {}
         counts = [usage.get(key) for key in ("prompt_tokens", "completion_tokens")]
@@ -352,6 +358,14 @@ class OpenAILLM(BaseLLM):
         if n == 0:
             return " (retries disabled)"
         return f" after {n} {'retry' if n == 1 else 'retries'}"
+
+
+def _said(response: Any) -> str:
+    """The error message a 200 answer's JSON carries (``{"error": {"message": ...}}`` or
+    ``{"error": "..."}``), on one line; empty if none."""
+    error = response.get("error") if isinstance(response, dict) else None
+    message = error.get("message") if isinstance(error, dict) else error
+    return one_line(message) if isinstance(message, str) else ""
 
 
 class _TooLarge(openai.OpenAIError):
