@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import socket
 import statistics
 import subprocess
 import sys
@@ -105,3 +106,35 @@ def results_dirs(parser: argparse.ArgumentParser, args: argparse.Namespace, *opt
     else:
         with quick_bench(*options, methods=methods) as out:
             yield [out]
+
+
+def free_port() -> int:
+    """A free TCP port on 127.0.0.1."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def start_server(db: Path, *flags: str) -> tuple[subprocess.Popen[bytes], str]:
+    """``llm-grop serve`` on a free loopback port, answering from the embedded model's
+    recording, with its job database ``db`` and ``flags``: its process and URL, once it
+    answers."""
+    import os
+    import time
+
+    import httpx
+
+    port = free_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "llm_grop", "serve", "--llm", "replay", "--replay",
+         str(RECORDING), "--db", str(db), "--port", str(port), *flags],
+        env=os.environ | {"MUJOCO_GL": "osmesa"}, stderr=subprocess.DEVNULL)
+    url = f"http://127.0.0.1:{port}"
+    for _ in range(300):
+        try:
+            if httpx.get(f"{url}/v1/info", timeout=1).status_code == 200:
+                return proc, url
+        except httpx.HTTPError:
+            time.sleep(0.1)
+    proc.kill()
+    raise SystemExit("the server did not start")

@@ -21,45 +21,19 @@ from __future__ import annotations
 import argparse
 import os
 import signal
-import socket
 import sqlite3
 import subprocess
-import sys
 import threading
 import time
 from collections import Counter
 from pathlib import Path
 
 import httpx
-from common import RECORDING, median_p95, parse_args, scratch
+from common import median_p95, parse_args, scratch, start_server
 
 from llm_grop.world.tasks import load_tasks
 
 TERMINAL = ("done", "failed", "cancelled")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def start(db: Path, workers: int) -> tuple[subprocess.Popen[bytes], str]:
-    port = free_port()
-    # Every client here is 127.0.0.1: the burst of runs is one client's.
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "llm_grop", "serve", "--llm", "replay", "--replay",
-         str(RECORDING), "--db", str(db), "--port", str(port), "--workers", str(workers),
-         "--runs-per-client", "64"],
-        env=os.environ | {"MUJOCO_GL": "osmesa"}, stderr=subprocess.DEVNULL)
-    url = f"http://127.0.0.1:{port}"
-    for _ in range(300):
-        try:
-            if httpx.get(f"{url}/v1/info", timeout=1).status_code == 200:
-                return proc, url
-        except httpx.HTTPError:
-            time.sleep(0.1)
-    raise SystemExit("the server did not start")
 
 
 def bodies(kind: str, n: int) -> list[dict]:
@@ -133,7 +107,9 @@ def main() -> None:
     args = parse_args(parser, {"workers": 1, "requests": 1, "burst": 2, "clients": 2,
                                "overload": 2})
     tmp = scratch("serve-load")
-    proc, url = start(tmp / "jobs.sqlite", args.workers)
+    # Every client here is 127.0.0.1: the burst of runs is one client's.
+    proc, url = start_server(tmp / "jobs.sqlite", "--workers", str(args.workers),
+                             "--runs-per-client", "64")
     print(f"llm-grop serve, {args.workers} workers, replayed SmolLM2-135M answers, loopback, "
           f"{os.cpu_count()} cores")
     try:
@@ -169,7 +145,8 @@ def main() -> None:
         proc.send_signal(signal.SIGKILL)
         proc.wait()
         print(f"kill -9 with {len(accepted)} runs accepted: {dict(states)} at the kill")
-        proc, url = start(tmp / "jobs.sqlite", args.workers)
+        proc, url = start_server(tmp / "jobs.sqlite", "--workers", str(args.workers),
+                             "--runs-per-client", "64")
         deadline = time.monotonic() + 600
         with httpx.Client(base_url=url, timeout=30) as c:
             while time.monotonic() < deadline:

@@ -23,8 +23,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
-import os
-import socket
 import statistics
 import subprocess
 import sys
@@ -33,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
-from common import RECORDING, parse_args, scratch
+from common import parse_args, scratch, start_server
 
 #: What each kind of stalled client sends before it stops: a request line and one header
 #: (no blank line), or whole headers announcing 100 bytes of body and 10 of them.
@@ -53,30 +51,6 @@ class Stalled:
 
     closed_after_s: float | None
     status: str
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def start(db: Path, *flags: str) -> tuple[subprocess.Popen[bytes], str]:
-    """``llm-grop serve`` on a free loopback port with ``flags``: its process and URL."""
-    port = free_port()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "llm_grop", "serve", "--llm", "replay", "--replay",
-         str(RECORDING), "--db", str(db), "--port", str(port), "--workers", "1", *flags],
-        env=os.environ | {"MUJOCO_GL": "osmesa"}, stderr=subprocess.DEVNULL)
-    url = f"http://127.0.0.1:{port}"
-    for _ in range(300):
-        try:
-            if httpx.get(f"{url}/v1/info", timeout=1).status_code == 200:
-                return proc, url
-        except httpx.HTTPError:
-            time.sleep(0.1)
-    proc.kill()
-    raise SystemExit("the server did not start")
 
 
 def has_deadlines() -> bool:
@@ -171,7 +145,7 @@ def main() -> None:
                             ("--body-timeout", args.body_timeout)):
             if value is not None:
                 flags += [flag, f"{value:g}"]
-    proc, url = start(db, *flags)
+    proc, url = start_server(db, "--workers", "1", *flags)
     try:
         results, normal = asyncio.run(attack(url, args.connections, args.watch))
     finally:
