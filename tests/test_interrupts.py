@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+from llm_grop.experiment.ray_loopback import RAY_LOOPBACK_SWITCH
+
 RECORDING = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "embedded_calls.jsonl"
 #: Moments tried (seconds after start) and the signal sent at each; seeded, so repeatable.
 MOMENTS = [(round(random.Random(k).uniform(0.02, 4.0), 3),
@@ -112,7 +114,7 @@ def test_sigterm_is_143_and_one_line_under_every_executor(executor: str, moment:
     out = tmp_path / "bench"
     tag = f"llm-grop-test-{uuid.uuid4().hex}"
     # Ray's cluster on loopback only, never on this machine's network address.
-    env = dict(os.environ, LLM_GROP_TEST_TAG=tag, RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER="0")
+    env = dict(os.environ, LLM_GROP_TEST_TAG=tag) | {RAY_LOOPBACK_SWITCH: "0"}
     proc = subprocess.Popen(
         [sys.executable, "-m", "llm_grop", "bench", "--tasks", "1,2", "--trials", "3",
          "--llm", "replay", "--replay", str(RECORDING), "--out", str(out), "--no-images",

@@ -16,6 +16,7 @@ import pytest
 from llm_grop.cli import main
 from llm_grop.contract.schemas import json_schema
 from llm_grop.experiment.executors import EXECUTORS
+from llm_grop.experiment.ray_loopback import LOOPBACK
 from llm_grop.experiment.trial import RUN_DEPENDENT_FIELDS
 from llm_grop.methods.base import ComposedMethod
 from llm_grop.methods.registry import METHODS, register_method
@@ -43,9 +44,10 @@ def local(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def ray_cluster():
-    """A real Ray cluster on this machine, as `ray.init(num_cpus=2)` starts it."""
+    """A real Ray cluster on this machine, as `ray.init(num_cpus=2)` starts it, on 127.0.0.1."""
     ray = pytest.importorskip("ray")
-    ray.init(num_cpus=2, include_dashboard=False, configure_logging=False)
+    ray.init(num_cpus=2, include_dashboard=False, configure_logging=False,
+             _node_ip_address=LOOPBACK)
     yield ray
     ray.shutdown()
 

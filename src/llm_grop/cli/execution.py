@@ -28,8 +28,9 @@ _EXECUTION_OPTIONS = [
                  help="Trials at once: local processes, or Ray tasks in flight [default: 1 "
                       "locally; under Ray the cluster's CPUs over --cpus-per-trial]."),
     click.option("--ray-address", metavar="ADDR",
-                 help="The Ray cluster to join, e.g. ray://head:10001 or auto [default: "
-                      "$RAY_ADDRESS, else a cluster started on this machine]."),
+                 help="The Ray cluster to join, e.g. ray://head:10001, auto, or "
+                      "127.0.0.1:6379 (a cluster on loopback, joined there) [default: "
+                      "$RAY_ADDRESS, else a cluster started on this machine, on 127.0.0.1]."),
     click.option("--cpus-per-trial", default=1.0, show_default=True,
                  type=click.FloatRange(0, min_open=True),
                  help="CPUs a Ray task reserves; below 1 lets trials that wait on a remote "

@@ -4,7 +4,10 @@ Needs the ``ray`` extra (``pip install 'llm-grop[ray]'``). Without ``--ray-addre
 without ``$RAY_ADDRESS``) it starts a Ray cluster on this machine with ``--workers`` CPUs
 (every CPU by default) and stops it at the end; with one it joins that cluster and leaves
 it running; a watchdog process (:mod:`.ray_watchdog`) stops the cluster it started should
-this process be killed. Every node must have llm-grop installed, with the same version and
+this process be killed. A cluster it starts runs its nodes on 127.0.0.1, and a cluster at a
+loopback address (``127.0.0.1:PORT``) is joined with the driver on that address
+(:mod:`.ray_loopback`): nothing it starts or joins on this machine uses the machine's
+network address. Every node must have llm-grop installed, with the same version and
 plugins as the driver, and must reach the files the experiment names (a scene, a replay
 recording, catalogs, tasks) at the same paths.
 
@@ -54,6 +57,7 @@ from typing import Any
 from llm_grop import plugins
 from llm_grop.errors import BadInput, LLMGropError
 from llm_grop.experiment.executors import ExecutorOptions, Registered
+from llm_grop.experiment.ray_loopback import node_address, use_loopback
 from llm_grop.experiment.worker import Done, Job, Runners, run_job
 
 log = logging.getLogger(__name__)
@@ -87,6 +91,12 @@ class RayExecutor:
     def __init__(self, options: ExecutorOptions) -> None:
         # Read once, when Ray is first imported; a user's own setting is kept.
         os.environ.setdefault("RAY_DISABLE_FAILURE_SIGNAL_HANDLER", "1")
+        # This driver's node address: on loopback for a cluster it starts or joins there
+        # (Ray would put both on this machine's network address).
+        self._node = node_address(options.address if options.address is not None
+                                  else os.environ.get("RAY_ADDRESS"))
+        if self._node is not None:
+            use_loopback()
         try:
             import ray
         except ImportError:
@@ -168,6 +178,8 @@ class RayExecutor:
             return False
         kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": True,
                                   "logging_level": logging.WARNING, "configure_logging": False}
+        if self._node is not None:
+            kwargs["_node_ip_address"] = self._node
         address = self.options.address
         if not log.isEnabledFor(logging.DEBUG):
             # Ray's start-up notes would interleave with the progress bar; errors still show.
@@ -175,7 +187,7 @@ class RayExecutor:
         try:
             if address is not None:
                 _check_reachable(address)
-                _check_joinable(address)
+                check_joinable(address, self._node)
                 _init(ray, address=address, **kwargs)
             else:
                 workers = self.options.workers
@@ -276,18 +288,21 @@ def _line(exc: BaseException) -> str:
 _PROBE_S = 5.0
 #: Seconds a trial join of a Ray cluster may take before it is called unjoinable.
 JOIN_S = 60.0
-_JOIN = ("import sys, ray; ray.init(address=sys.argv[1], include_dashboard=False, "
-         "log_to_driver=False, configure_logging=False); ray.shutdown()")
+_JOIN = ("import sys, ray; ray.init(address=sys.argv[1], _node_ip_address=sys.argv[2] or None, "
+         "include_dashboard=False, log_to_driver=False, configure_logging=False); "
+         "ray.shutdown()")
 
 
-def _check_joinable(address: str) -> None:
+def check_joinable(address: str, node: str | None) -> None:
     """:class:`ConnectionError` unless a throwaway process joins the cluster at
-    ``address`` within :data:`JOIN_S` seconds: a port that answers is not yet a cluster
-    this machine can join (one bound to another host's loopback accepts the connection,
-    and Ray then waits for minutes)."""
+    ``address`` within :data:`JOIN_S` seconds, as the driver will (node address ``node``,
+    ``None`` for Ray's choice; it inherits the driver's environment, so Ray's loopback
+    switch too): a port that answers is not yet a cluster this machine can join (one
+    bound to another host's loopback accepts the connection, and Ray then waits for
+    minutes)."""
     try:
-        probe = subprocess.run([sys.executable, "-c", _JOIN, address], capture_output=True,
-                               text=True, timeout=JOIN_S)
+        probe = subprocess.run([sys.executable, "-c", _JOIN, address, node or ""],
+                               capture_output=True, text=True, timeout=JOIN_S)
     except subprocess.TimeoutExpired:
         raise ConnectionError(f"could not join it within {JOIN_S:g} s (is the cluster's "
                               "node address reachable from here?)") from None
