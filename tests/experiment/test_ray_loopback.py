@@ -6,6 +6,8 @@ fields); a cluster ``--executor ray`` starts runs on 127.0.0.1 and dies with its
 
 from __future__ import annotations
 
+import contextlib
+import ipaddress
 import json
 import os
 import re
@@ -56,6 +58,106 @@ def _stable(rows: list[dict]) -> list[dict]:
 def test_the_drivers_node_address_is_loopback_for_a_loopback_cluster(
         address: str | None, node: str | None) -> None:
     assert node_address(address) == node
+
+
+def test_a_port_that_answers_but_is_no_cluster_is_refused_in_time(tmp_path: Path,
+                                                                  monkeypatch, capsys) -> None:
+    import socket
+
+    from llm_grop.experiment import ray_executor
+
+    pytest.importorskip("ray")
+    monkeypatch.setattr(ray_executor, "JOIN_S", 5.0)
+    with socket.create_server((LOOPBACK, 0)) as silent:  # accepts, never speaks
+        port = silent.getsockname()[1]
+        t0 = time.monotonic()
+        code = main(BASE + ["--out", str(tmp_path / "x"), "--executor", "ray",
+                            "--ray-address", f"{LOOPBACK}:{port}"])
+        took = time.monotonic() - t0
+    assert code == 2 and took < 20
+    err = capsys.readouterr().err.strip()
+    assert err == (f"llm-grop: error: --executor ray: cannot reach the Ray cluster at "
+                   f"127.0.0.1:{port}: could not join it within 5 s (is the cluster's node "
+                   "address reachable from here?)")
+
+
+def _ray_processes() -> dict[int, str]:
+    """Ray's processes on this machine: pid -> command line."""
+    found = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+            except OSError:
+                continue
+            if "ray::" in cmd or "/ray/" in cmd and ("raylet" in cmd or "gcs_server" in cmd
+                                                     or "dashboard" in cmd):
+                found[int(entry.name)] = cmd.strip()
+    return found
+
+
+#: A node address on a Ray process's command line (``--node-ip-address=`` and the like).
+NODE_FLAG = re.compile(r"--node[-_]ip[-_]address[= ](\S+)")
+
+
+def _listening(pids: set[int]) -> set[ipaddress.IPv4Address | ipaddress.IPv6Address]:
+    """The addresses the TCP sockets of ``pids`` listen on (``/proc/net/tcp`` and ``tcp6``)."""
+    inodes = set()
+    for pid in pids:
+        with contextlib.suppress(OSError):  # gone meanwhile
+            for fd in Path(f"/proc/{pid}/fd").iterdir():
+                with contextlib.suppress(OSError):
+                    inodes.add(os.readlink(fd).removeprefix("socket:[").removesuffix("]"))
+    found: set[ipaddress.IPv4Address | ipaddress.IPv6Address] = set()
+    for table in ("tcp", "tcp6"):
+        for line in Path(f"/proc/net/{table}").read_text().splitlines()[1:]:
+            fields = line.split()
+            if fields[3] == "0A" and fields[9] in inodes:  # 0A: listening
+                # The kernel prints each 32-bit word of the address in host (little-endian) order.
+                raw = bytes.fromhex(fields[1].split(":")[0])
+                words = b"".join(raw[i:i + 4][::-1] for i in range(0, len(raw), 4))
+                found.add(ipaddress.ip_address(words))
+    return found
+
+
+def _loopback(ip: ipaddress.IPv4Address | ipaddress.IPv6Address) -> bool:
+    mapped = ip.ipv4_mapped if isinstance(ip, ipaddress.IPv6Address) else None
+    return (mapped or ip).is_loopback
+
+
+def test_a_started_cluster_runs_on_loopback_and_dies_with_a_killed_driver(
+        tmp_path: Path) -> None:
+    # Before the module's cluster starts: ray.init() without an address would join it
+    # (Ray finds a cluster_utils or `ray start` cluster through its address file).
+    import signal
+    import subprocess
+    import sys
+
+    pytest.importorskip("ray")
+    before = set(_ray_processes())
+    out = tmp_path / "killed"
+    # Without the tests' own loopback switch: the executor must set it itself.
+    env = {k: v for k, v in os.environ.items() if k != RAY_LOOPBACK_SWITCH}
+    driver = subprocess.Popen([sys.executable, "-m", "llm_grop", *BASE, "--out", str(out),
+                               "--executor", "ray", "--workers", "1"], env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 180
+    while not _rows(out):
+        assert driver.poll() is None and time.monotonic() < deadline
+        time.sleep(0.05)
+    started = {pid: cmd for pid, cmd in _ray_processes().items() if pid not in before}
+    assert started, "the driver should have started a Ray cluster"
+    addresses = {a for cmd in started.values() for a in NODE_FLAG.findall(cmd)}
+    assert addresses == {LOOPBACK}, started
+    listening = _listening(set(started))
+    assert listening and all(_loopback(ip) for ip in listening), listening
+    driver.send_signal(signal.SIGKILL)
+    driver.wait()
+    deadline = time.monotonic() + 20
+    while set(_ray_processes()) & set(started) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = {pid: cmd for pid, cmd in _ray_processes().items() if pid in started}
+    assert not left, f"Ray processes outlived the driver: {left}"
 
 
 @pytest.fixture(scope="module")
@@ -136,74 +238,3 @@ def test_a_lost_node_loses_and_duplicates_no_row(cluster: Any, local: list[dict]
     keys = [(r["task"], r["trial"], r["method"]) for r in rows]
     assert len(keys) == len(set(keys)) == ROWS
     assert _stable(rows) == _stable(local)
-
-
-def test_a_port_that_answers_but_is_no_cluster_is_refused_in_time(tmp_path: Path,
-                                                                  monkeypatch, capsys) -> None:
-    import socket
-
-    from llm_grop.experiment import ray_executor
-
-    pytest.importorskip("ray")
-    monkeypatch.setattr(ray_executor, "JOIN_S", 5.0)
-    with socket.create_server((LOOPBACK, 0)) as silent:  # accepts, never speaks
-        port = silent.getsockname()[1]
-        t0 = time.monotonic()
-        code = main(BASE + ["--out", str(tmp_path / "x"), "--executor", "ray",
-                            "--ray-address", f"{LOOPBACK}:{port}"])
-        took = time.monotonic() - t0
-    assert code == 2 and took < 20
-    err = capsys.readouterr().err.strip()
-    assert err == (f"llm-grop: error: --executor ray: cannot reach the Ray cluster at "
-                   f"127.0.0.1:{port}: could not join it within 5 s (is the cluster's node "
-                   "address reachable from here?)")
-
-
-def _ray_processes() -> dict[int, str]:
-    """Ray's processes on this machine: pid -> command line."""
-    found = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
-            except OSError:
-                continue
-            if "ray::" in cmd or "/ray/" in cmd and ("raylet" in cmd or "gcs_server" in cmd
-                                                     or "dashboard" in cmd):
-                found[int(entry.name)] = cmd.strip()
-    return found
-
-
-#: A node address on a Ray process's command line (``--node-ip-address=`` and the like).
-NODE_FLAG = re.compile(r"--node[-_]ip[-_]address[= ](\S+)")
-
-
-def test_a_started_cluster_runs_on_loopback_and_dies_with_a_killed_driver(
-        tmp_path: Path) -> None:
-    import signal
-    import subprocess
-    import sys
-
-    pytest.importorskip("ray")
-    before = set(_ray_processes())
-    out = tmp_path / "killed"
-    # Without the tests' own loopback switch: the executor must set it itself.
-    env = {k: v for k, v in os.environ.items() if k != RAY_LOOPBACK_SWITCH}
-    driver = subprocess.Popen([sys.executable, "-m", "llm_grop", *BASE, "--out", str(out),
-                               "--executor", "ray", "--workers", "1"], env=env,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 180
-    while not _rows(out):
-        assert driver.poll() is None and time.monotonic() < deadline
-        time.sleep(0.05)
-    started = {pid: cmd for pid, cmd in _ray_processes().items() if pid not in before}
-    assert started, "the driver should have started a Ray cluster"
-    addresses = {a for cmd in started.values() for a in NODE_FLAG.findall(cmd)}
-    assert addresses == {LOOPBACK}, started
-    driver.send_signal(signal.SIGKILL)
-    driver.wait()
-    deadline = time.monotonic() + 20
-    while set(_ray_processes()) & set(started) and time.monotonic() < deadline:
-        time.sleep(0.2)
-    left = {pid: cmd for pid, cmd in _ray_processes().items() if pid in started}
-    assert not left, f"Ray processes outlived the driver: {left}"

@@ -178,9 +178,12 @@ class RayExecutor:
             return False
         kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": True,
                                   "logging_level": logging.WARNING, "configure_logging": False}
-        if self._node is not None:
-            kwargs["_node_ip_address"] = self._node
         address = self.options.address
+        if address is not None and self._node is not None:
+            # Joined on the cluster's own loopback address. A cluster this driver starts
+            # takes 127.0.0.1 by Ray's loopback switch alone: ray.init() without an
+            # address joins a cluster `ray start` left running, wherever its nodes are.
+            kwargs["_node_ip_address"] = self._node
         if not log.isEnabledFor(logging.DEBUG):
             # Ray's start-up notes would interleave with the progress bar; errors still show.
             logging.getLogger("ray").setLevel(logging.ERROR)
