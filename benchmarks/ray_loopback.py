@@ -69,20 +69,24 @@ def lose_a_node(cluster: Any, out: Path, tasks: str, trials: int) -> tuple[float
     bench it went)``."""
     worker = next(iter(cluster.worker_nodes))
     t0 = time.perf_counter()
-    proc = subprocess.Popen(bench_command(out, tasks, trials, "--executor", "ray",
-                                          "--ray-address", cluster.address))
-    try:
-        while not rows(out) and proc.poll() is None:
-            time.sleep(0.05)
-        at_loss, lost_s = len(rows(out)), time.perf_counter() - t0
-        cluster.remove_node(worker)
-        code = proc.wait(timeout=BENCH_S)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    if code != 0:
-        raise SystemExit(f"the bench on the cluster exited {code}")
+    # The bench's output (Ray's note on each batch it runs again) is shown if it fails.
+    with out.with_suffix(".log").open("w+") as log:
+        proc = subprocess.Popen(bench_command(out, tasks, trials, "--executor", "ray",
+                                              "--ray-address", cluster.address),
+                                stdout=log, stderr=subprocess.STDOUT)
+        try:
+            while not rows(out) and proc.poll() is None:
+                time.sleep(0.05)
+            at_loss, lost_s = len(rows(out)), time.perf_counter() - t0
+            cluster.remove_node(worker)
+            code = proc.wait(timeout=BENCH_S)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        if code != 0:
+            log.seek(0)
+            raise SystemExit(f"the bench on the cluster exited {code}:\n{log.read()[-2000:]}")
     return time.perf_counter() - t0, at_loss, lost_s
 
 
