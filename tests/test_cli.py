@@ -386,3 +386,16 @@ def test_a_request_that_is_not_utf8_is_one_line(tmp_path: Path) -> None:
                           capture_output=True, text=True, check=False)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "not UTF-8 text" in done.stderr
+
+
+def test_a_step_row_counts_failed_attempts() -> None:
+    """The execution table says "failed attempts", as the result line does, never
+    "failures" beside a success."""
+    from llm_grop.cli.console import _attempts
+    from llm_grop.world.plan import ExecutedStep
+
+    failed = ExecutedStep("place", False, 2.0, "mug", reason="no_ik")
+    done = ExecutedStep("place", True, 2.0, "mug", attempt=2)
+    assert _attempts([failed, done]) == "ok after 1 failed attempt (no ik)"
+    assert _attempts([failed, failed, done]) == "ok after 2 failed attempts (no ik)"
+    assert _attempts([done]) == "ok"

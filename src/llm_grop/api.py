@@ -23,6 +23,7 @@ from llm_grop.assembly import (
     make_simulator,
     named_simulator,
     planner_options,
+    resolve_feasibility,
     sampling,
     settle,
 )
@@ -189,6 +190,7 @@ def run(request: str | None = None, settings: RunSettings | None = None, *,
     execution = overrides.pop("execution", None)
     job = RunInputs.of(settings, llm, scene, overrides)
     sim = simulator if simulator is not None else make_simulator(job.settings)
+    job = replace(job, settings=resolve_feasibility(job.settings, sim))
     planned = _plan(request, job, catalog, on_event, sim.check)
     return execute(planned, simulator=sim, execution=execution)
 
@@ -238,7 +240,7 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
     from llm_grop.planning.feasibility import feasibility_profile
     from llm_grop.simulation.scenario import prepare_episode
 
-    s = job.settings
+    s = resolve_feasibility(job.settings)
     catalog = catalog or Catalog.load(s.catalog_files)
     tasks = job.tasks if job.tasks is not None or not s.task_files \
         else load_tasks(s.task_files)

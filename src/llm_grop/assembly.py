@@ -216,6 +216,17 @@ def make_simulator(s: RunSettings) -> Simulator:
     return create_simulator(s.simulator, dict(s.sim_options), grasp=s.grasp, truth=s.truth)
 
 
+def resolve_feasibility(s: RunSettings, simulator: Simulator | None = None) -> RunSettings:
+    """The record ``s`` with ``feasibility="auto"`` replaced by the profile fitted to the
+    simulator that executes (``simulator``, else the one ``s`` names:
+    :meth:`~llm_grop.simulation.base.Simulator.fitted_profile`), so that the run JSON
+    and an experiment's identity name the profile the planner used."""
+    if s.feasibility != AUTO:
+        return s
+    sim = simulator if simulator is not None else make_simulator(s)
+    return s.with_values(feasibility=sim.fitted_profile())
+
+
 def named_llm(llm: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
     """``llm`` as an object (``None``: the record's backend); a name given as ``llm`` is
     the ``llm`` setting."""

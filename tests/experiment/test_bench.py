@@ -248,3 +248,22 @@ def test_resume_removes_duplicate_rows_keeping_the_first(finished: Path,
     assert _rows(out) == _rows(finished)
     summary = json.loads((out / "summary.json").read_text())
     assert summary == json.loads((finished / "summary.json").read_text())
+
+
+def test_the_experiment_names_the_profile_auto_chose(tmp_path: Path) -> None:
+    """``--feasibility auto`` (the default) is resolved before the experiment's identity
+    is written: a 3D bench plans with, and names, the profile fitted in MuJoCo."""
+    from llm_grop.cli.bench import prepare_experiment
+    from llm_grop.experiment.runner import identity
+    from llm_grop.settings import RunSettings
+
+    def named(**values) -> str:
+        exp = prepare_experiment(RunSettings(**values), tasks_text="1", trials=1,
+                                 methods_text="grop", out_dir=tmp_path / "out",
+                                 no_images=True, threads=None)
+        return identity(exp)["feasibility"]
+
+    assert named(simulator="mujoco") == "mujoco"
+    assert named() == "default"
+    assert named(truth="mujoco") == "mujoco"
+    assert named(simulator="mujoco", feasibility="default") == "default"

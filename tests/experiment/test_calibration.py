@@ -86,5 +86,25 @@ def test_run_names_its_profile(tmp_path: Path) -> None:
     assert main(["run", "a dinner fork", "--method", "grop", "--feasibility", "mujoco",
                  "--json", str(out), "-q"]) == 0
     assert json.loads(out.read_text())["feasibility"] == "mujoco"
+    # auto, the default: the profile fitted to the simulator that executes.
     assert main(["run", "a dinner fork", "--method", "grop", "--json", str(out), "-q"]) == 0
-    assert "feasibility" not in json.loads(out.read_text())
+    assert json.loads(out.read_text())["feasibility"] == "default"
+    assert main(["run", "a dinner fork", "--method", "grop", "--truth", "mujoco",
+                 "--json", str(out), "-q"]) == 0
+    assert json.loads(out.read_text())["feasibility"] == "mujoco"
+
+
+def test_auto_follows_the_simulator() -> None:
+    """``auto`` is resolved by the simulator's declared fitted profile, so the 3D world
+    plans with what was measured there; an explicit profile still wins."""
+    from llm_grop.assembly import resolve_feasibility
+    from llm_grop.settings import RunSettings
+    from llm_grop.simulation.mujoco.simulator import MujocoSimulator
+
+    assert RunSettings().feasibility == "auto"
+    assert resolve_feasibility(RunSettings(simulator="mujoco")).feasibility == "mujoco"
+    assert resolve_feasibility(RunSettings(truth="mujoco")).feasibility == "mujoco"
+    assert resolve_feasibility(RunSettings()).feasibility == "default"
+    assert resolve_feasibility(RunSettings(), MujocoSimulator()).feasibility == "mujoco"
+    named = RunSettings(simulator="mujoco", feasibility="default")
+    assert resolve_feasibility(named).feasibility == "default"

@@ -11,7 +11,9 @@ from matplotlib.image import imread
 
 from llm_grop.errors import BadInput
 from llm_grop.experiment.plots import (
+    AUTOMATIC,
     BARS_FIGSIZE_IN,
+    HUMAN,
     METHOD_STYLES,
     SCATTER_FIGSIZE_IN,
     display_name,
@@ -135,3 +137,26 @@ def test_bad_paths(tmp_path: Path, plot: Any) -> None:
         plot(full_summary(), tmp_path / "fig.svg")
     with pytest.raises(BadInput, match="cannot write"):
         plot(full_summary(), tmp_path / "missing" / "fig.png")
+
+
+@pytest.mark.parametrize("plot", PLOTS)
+def test_the_rating_axis_names_who_rated(plot, tmp_path: Path) -> None:
+    """A bench's figure says its ratings are the automatic rater's; a study's report says
+    people gave them: the two pictures differ, and each is the same bytes every time."""
+    auto, human = tmp_path / "auto.png", tmp_path / "human.png"
+    plot(full_summary(), auto)
+    plot(full_summary(), human, rated_by=HUMAN)
+    again = tmp_path / "again.png"
+    plot(full_summary(), again, rated_by=AUTOMATIC)
+    assert auto.read_bytes() == again.read_bytes() != human.read_bytes()
+
+
+def test_the_labels_name_the_rater() -> None:
+    from matplotlib.figure import Figure
+
+    from llm_grop.experiment.plots import _draw_bars, _draw_scatter
+
+    for draw in (_draw_scatter, _draw_bars):
+        ax = Figure().add_subplot()
+        draw(ax, full_summary(), AUTOMATIC)
+        assert ax.get_ylabel().startswith("automatic rating (1-5)")

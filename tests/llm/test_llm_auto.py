@@ -145,3 +145,26 @@ def _env() -> dict[str, str]:
     import os
 
     return {k: v for k, v in os.environ.items() if not k.startswith("OPENAI_")}
+
+
+def test_fallback_reason_is_printed_once() -> None:
+    """When ``auto`` falls back to the embedded model, the reason is in the note only; the
+    LLM line says that ``auto`` chose it and points there."""
+    from io import StringIO
+
+    from rich.console import Console
+
+    from llm_grop.cli.console import print_llm
+    from llm_grop.llm.embedded import DEFAULT_MODEL
+    from llm_grop.world.llmlog import LLMSummary
+
+    why = "no OpenAI-compatible server answered on 127.0.0.1 (ports 11434)"
+    out, err = StringIO(), StringIO()
+    print_llm(LLMSummary("embedded", DEFAULT_MODEL, (), why),
+              Console(file=out, width=200), Console(file=err, width=200))
+    assert "chosen by --llm auto: see the note" in out.getvalue()
+    assert why not in out.getvalue() and err.getvalue().count(why) == 1
+    served = StringIO()
+    print_llm(LLMSummary("openai", "local-model", (), "a server answered on 127.0.0.1:8080"),
+              Console(file=served, width=200))
+    assert "(auto: a server answered on 127.0.0.1:8080)" in served.getvalue()

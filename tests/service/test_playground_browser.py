@@ -83,6 +83,7 @@ def test_a_mujoco_run_shows_its_render_and_video(server: Server, browser: Browse
     # The page follows the run's events and shows the result when it ends.
     expect(page.locator("#render-table")).to_be_visible(timeout=240_000)
     expect(page.locator("#summary")).to_contain_text("in mujoco")
+    expect(page.locator("#summary")).to_contain_text(re.compile(r"\d+ failed attempts?,"))
     assert loaded(page, "#render-table") and loaded(page, "#room")
     expect(page.locator("#video")).to_have_attribute("src", re.compile(r"\.mp4$"))
     page.screenshot(path=screenshots / "run_mujoco.png", full_page=True)

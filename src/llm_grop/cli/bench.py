@@ -173,7 +173,7 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     preferences, the output directory) before any trial runs. ``threads`` are the embedded
     model's per worker.
     """
-    from llm_grop.assembly import make_backend, make_simulator, resolve_llm
+    from llm_grop.assembly import make_backend, make_simulator, resolve_feasibility, resolve_llm
     from llm_grop.experiment.runner import Experiment
     from llm_grop.experiment.trial import TrialSettings
     from llm_grop.files.scene_file import load_scene, set_target_top
@@ -201,6 +201,7 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     # Unknown or broken components are reported before any trial runs, and their names
     # are written canonically into the experiment's identity.
     sim = make_simulator(settings)
+    settings = resolve_feasibility(settings, sim)  # the experiment names the profile used
     feasibility_profile(settings.feasibility)
     if not no_images and sim.supports_pictures:
         sim.check_rendering()  # a simulator that renders says now if it cannot

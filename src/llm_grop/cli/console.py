@@ -153,19 +153,23 @@ def print_llm(llm: LLMSummary, console: Console, err: Console | None = None) -> 
     from llm_grop.llm.auto import fallback_note
     from llm_grop.llm.embedded import DEFAULT_MODEL
 
-    console.print(llm_line(llm))
-    if llm.backend == "embedded" and llm.model == DEFAULT_MODEL and llm.chosen_by is not None:
+    fell_back = llm.backend == "embedded" and llm.model == DEFAULT_MODEL \
+        and llm.chosen_by is not None
+    console.print(llm_line(llm, noted=fell_back))
+    if fell_back:
         (err or console).print(f"note: {fallback_note(llm.chosen_by)}", markup=False,
                                highlight=False)
 
 
-def llm_line(llm: LLMSummary) -> str:
-    """The LLM's one line: backend and model, the calls, which of them the cache or a
+def llm_line(llm: LLMSummary, noted: bool = False) -> str:
+    """The LLM's one line: backend and model, why ``--llm auto`` chose it (or, when
+    ``noted``, that a note below says why), the calls, which of them the cache or a
     recording answered, and the seconds the live ones took."""
     calls = llm.calls
     cached = sum(c.cached for c in calls)
     live = sum(c.latency_s for c in calls if not c.cached)
-    chosen = f" (auto: {llm.chosen_by})" if llm.chosen_by else ""
+    chosen = "" if not llm.chosen_by else \
+        " (chosen by --llm auto: see the note)" if noted else f" (auto: {llm.chosen_by})"
     head = f"LLM: {llm.backend} / {llm.model}{chosen}, {len(calls)} " \
         f"call{'s' * (len(calls) != 1)}"
     recorded = sum(c.latency_s for c in calls)
@@ -180,13 +184,13 @@ def llm_line(llm: LLMSummary) -> str:
 
 
 def _attempts(steps: list[ExecutedStep]) -> str:
-    """``"ok"``, ``"ok after 2 failures (slid, contact)"`` or ``"failed x3 (no IK)"``,
-    with the failures' reasons."""
+    """``"ok"``, ``"ok after 2 failed attempts (slid, contact)"`` or ``"failed x3 (no
+    IK)"``, with the failed attempts' reasons."""
     if not steps:
         return "-"
     failed = [s for s in steps if not s.ok]
     why = ", ".join(dict.fromkeys((s.reason or "refused").replace("_", " ") for s in failed))
     if steps[-1].ok:
         n = len(failed)
-        return "ok" if not n else f"ok after {n} failure{'s' * (n > 1)} ({why})"
+        return "ok" if not n else f"ok after {n} failed attempt{'s' * (n > 1)} ({why})"
     return f"[red]failed x{len(failed)} ({why})[/red]"

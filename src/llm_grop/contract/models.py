@@ -295,7 +295,10 @@ class RunDoc(Doc):
     planned: ArrangementDoc = Field(description="the arrangement the plan realises")
     simulator: Name = Field(description="the simulator that executed the plan")
     feasibility: Name | None = Field(None, description="the planner's feasibility profile "
-                                                       "(absent: default)")
+                                                       "(its belief; --feasibility auto "
+                                                       "resolved to the profile fitted to "
+                                                       "the simulator; absent in runs of "
+                                                       "versions before 0.17.0: default)")
     scene: SceneFile = Field(description="the episode's room, with its sampled chairs and "
                                          "object starts, in the scene file's layout")
 

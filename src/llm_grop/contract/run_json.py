@@ -121,7 +121,7 @@ def run_doc(r: RunResult, *, llm_log: bool = True) -> RunDoc:
         plan=plan_doc(r.plan),
         planned=arrangement_doc(r.planned, llm_log=llm_log),
         simulator=r.simulator,
-        **({"feasibility": r.feasibility} if r.feasibility != "default" else {}),
+        feasibility=r.feasibility,
         scene=SceneFile.model_validate(scene_to_dict(r.scene)))
 
 

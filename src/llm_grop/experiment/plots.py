@@ -56,8 +56,16 @@ def display_name(method: str) -> str:
     return DISPLAY_NAMES.get(method, method)
 
 
-def plot_rating_vs_time(summary: Summary, path: str | Path) -> None:
-    """Write Fig. 3 to ``path``: mean rating (1-5) against mean execution time (s).
+#: Who rated a bench's trials: its summary's ratings come from the automatic rater.
+AUTOMATIC = "automatic rating"
+#: Who rated a study's pictures (``llm-grop ratings report``): people.
+HUMAN = "human rating"
+
+
+def plot_rating_vs_time(summary: Summary, path: str | Path, *, rated_by: str = AUTOMATIC
+                        ) -> None:
+    """Write Fig. 3 to ``path``: mean rating (1-5) against mean execution time (s); the
+    rating's axis names who rated (``rated_by``: :data:`AUTOMATIC` or :data:`HUMAN`).
 
     Each method is one marker with standard-error bars on both axes (none when it has a
     single value); a method without a rating or an execution time is not plotted and is
@@ -71,12 +79,14 @@ def plot_rating_vs_time(summary: Summary, path: str | Path) -> None:
         complete = all(not (math.isnan(m.execution_time_s.mean) or math.isnan(m.rating.mean))
                        for m in summary.methods)
         ax = fig.add_axes((0.12, 0.12, 0.84, 0.82) if complete else (0.12, 0.2, 0.84, 0.74))
-        _draw_scatter(ax, summary)
+        _draw_scatter(ax, summary, rated_by)
         save_png(fig, path)
 
 
-def plot_rating_per_task(summary: Summary, path: str | Path) -> None:
-    """Write Fig. 5 to ``path``: mean rating (0-5 axis) per task as grouped bars.
+def plot_rating_per_task(summary: Summary, path: str | Path, *,
+                         rated_by: str = AUTOMATIC) -> None:
+    """Write Fig. 5 to ``path``: mean rating (0-5 axis) per task as grouped bars, the
+    rating's axis naming who rated (``rated_by``).
 
     Tasks go along x in ascending order, one bar per method in the summary's order, each
     labelled with its mean to one decimal; a (method, task) pair without a rating gets no
@@ -87,7 +97,7 @@ def plot_rating_per_task(summary: Summary, path: str | Path) -> None:
     with matplotlib.rc_context(STYLE):
         fig = _new_figure(BARS_FIGSIZE_IN)
         ax = fig.add_axes((0.06, 0.17, 0.92, 0.69))
-        _draw_bars(ax, summary)
+        _draw_bars(ax, summary, rated_by)
         save_png(fig, path)
 
 
@@ -110,7 +120,7 @@ def _grid(ax: Axes, axis: str) -> None:
     ax.set_axisbelow(True)
 
 
-def _draw_scatter(ax: Axes, summary: Summary) -> None:
+def _draw_scatter(ax: Axes, summary: Summary, rated_by: str) -> None:
     _grid(ax, "both")
     styles = method_styles(summary.method_names)
     missing: list[str] = []
@@ -126,7 +136,7 @@ def _draw_scatter(ax: Axes, summary: Summary) -> None:
                     ecolor=color, elinewidth=1.2, capsize=4, capthick=1.2,
                     label=f"{display_name(m.method)} (n = {y.n})", zorder=3)
     ax.set_xlabel("execution time (s), mean ± SE")
-    ax.set_ylabel("user rating (1-5), mean ± SE")
+    ax.set_ylabel(f"{rated_by} (1-5), mean ± SE")
     if len(missing) < len(summary.methods):
         ax.margins(x=0.25, y=0.25)
         ax.legend(loc="best", fontsize=8, frameon=True, framealpha=0.9, edgecolor="#cccccc")
@@ -142,7 +152,7 @@ def _draw_scatter(ax: Axes, summary: Summary) -> None:
                     color="#555555", annotation_clip=False)
 
 
-def _draw_bars(ax: Axes, summary: Summary) -> None:
+def _draw_bars(ax: Axes, summary: Summary, rated_by: str) -> None:
     _grid(ax, "y")
     names = summary.method_names
     tasks = summary.tasks
@@ -178,7 +188,7 @@ def _draw_bars(ax: Axes, summary: Summary) -> None:
     ax.set_xlim(-0.6, max(len(tasks), 1) - 0.4)
     ax.set_ylim(0.0, _RATING_MAX)
     ax.set_xlabel("task")
-    ax.set_ylabel("user rating (1-5), mean ± SE")
+    ax.set_ylabel(f"{rated_by} (1-5), mean ± SE")
     if names:
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.01), ncol=min(len(names), 6),
                   fontsize=8.5, frameon=False)

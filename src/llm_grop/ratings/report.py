@@ -32,7 +32,7 @@ import numpy as np
 from scipy import stats
 
 from llm_grop.experiment.paired import PairedComparison, paired_comparisons
-from llm_grop.experiment.plots import plot_rating_per_task, plot_rating_vs_time
+from llm_grop.experiment.plots import HUMAN, plot_rating_per_task, plot_rating_vs_time
 from llm_grop.experiment.summary import (
     Summary,
     Table,
@@ -248,8 +248,8 @@ def write_report(report: HumanReport, out: Path) -> list[Path]:
     """Write :data:`FILES` into the directory ``out`` (made if missing); their paths."""
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "report.json", report_to_dict(report))
-    plot_rating_vs_time(report.summary, out / FIG3)
-    plot_rating_per_task(report.summary, out / FIG5)
+    plot_rating_vs_time(report.summary, out / FIG3, rated_by=HUMAN)
+    plot_rating_per_task(report.summary, out / FIG5, rated_by=HUMAN)
     write_text(out / "report.md", report_markdown(report))
     write_text(out / "report.html", render(
         "report.html", report=report, s=sections(report), fig3=FIG3, fig5=FIG5,

@@ -385,7 +385,7 @@ def _draw_title(fig: Figure, result: RunResult, title: str | None) -> None:
     outcome = "success" if result.success else f"failed ({len(ex.unplaced)} not placed)"
     facts = (f"method {result.method}  |  task {task}  |  seed {result.seed}  |  {outcome}  |  "
              f"execution {ex.execution_time_s:.1f} s  |  planning {result.planning_time_s:.2f} s"
-             f"  |  failed actions {ex.failures}  |  scene {result.scene.name}")
+             f"  |  failed attempts {ex.failures}  |  scene {result.scene.name}")
     fig.axes[0].annotate(_clip(facts, _TITLE_WIDTH_CHARS + 40, 1), xy=(0.5, 0.0),
                          xycoords=head, xytext=(0, -6), textcoords="offset points",
                          ha="center", va="top", fontsize=9, annotation_clip=False,

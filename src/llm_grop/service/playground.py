@@ -260,7 +260,7 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
         out["arrangement"] = web(ArrangementDoc.model_validate(run["planned"]))
         out["summary"] = (f"{'success' if run['success'] else 'failed'}: execution "
                           f"{run['execution_time_s']:.1f} s, {run['failures']} failed "
-                          f"actions, in {run['simulator']}")
+                          f"attempt{'s' * (run['failures'] != 1)}, in {run['simulator']}")
         picture("room.png", "The run in the room", "The run: the robot's paths")
         picture("table.png", "The table as executed", "The table as executed",
                 "table_phone.png")

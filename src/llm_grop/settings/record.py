@@ -185,8 +185,10 @@ class RunSettings(BaseModel):
              "missed, the setting's shift); 0 ignores fidelity.", group="plan", ge=0,
         allow_inf_nan=False)
     feasibility: str = setting(
-        "default", "The planner's feasibility profile: default (assumed) or mujoco (fitted "
-                   "in 3D).", group="plan", min_length=1)
+        "auto", "The planner's feasibility profile: auto (the profile fitted to the "
+                "simulator that executes: mujoco in 3D; in 2D the one --truth draws from, "
+                "else default), default (assumed) or mujoco (fitted in 3D).", group="plan",
+        min_length=1)
 
     # Execution
     simulator: str = setting(

@@ -107,7 +107,9 @@ class Simulator(ABC):
       :meth:`check_rendering` says before any work whether it can);
     - ``supports_video``: its options' ``video_path`` records each episode as an MP4;
     - ``cameras``: the named cameras its pictures and videos may be taken from (its
-      options' ``camera``).
+      options' ``camera``);
+    - :meth:`fitted_profile`: the packaged feasibility profile fitted to what it does,
+      which the planner believes under ``--feasibility auto``.
 
     All randomness comes from the ``rng`` given to :meth:`session`.
     """
@@ -123,6 +125,13 @@ class Simulator(ABC):
                 replan: PathPlanner) -> Session:
         """A new episode in ``scene`` (its chairs are the true ones) with ``items`` at
         their starts."""
+
+    def fitted_profile(self) -> str:
+        """The name of the packaged feasibility profile (``data/feasibility.yaml``) whose
+        curves describe what this simulator does: the planner's belief under
+        ``--feasibility auto``. The default, ``default``, is the assumed profile, for a
+        simulator no profile was fitted to."""
+        return "default"
 
     def check(self, scene: Scene, items: Sequence[Item] = ()) -> None:
         """:class:`~llm_grop.errors.BadInput` when this scene or these objects cannot be

@@ -108,6 +108,11 @@ class Kinematic2D(Simulator):
             options = replace(options, outcomes=ParametricOutcomes.from_profile(options.truth))
         self.options = options
 
+    def fitted_profile(self) -> str:
+        """The profile its outcomes are drawn from: ``truth``, else ``default`` (whose
+        curves are the 2D simulator's own)."""
+        return self.options.truth or "default"
+
     def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,
                 replan: PathPlanner) -> Kinematic2DSession:
         """A new episode in ``scene`` with ``items`` at their starts."""

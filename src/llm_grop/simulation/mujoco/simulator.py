@@ -52,6 +52,11 @@ class MujocoSimulator(Simulator):
         self.world: World | None = None
         self._ik: ArmIK | None = None
 
+    def fitted_profile(self) -> str:
+        """``mujoco``: the profile fitted to Task 8 episodes in this world
+        (``benchmarks/fit_profile.py``)."""
+        return "mujoco"
+
     def picture(self, view: View = "table", size: tuple[int, int] | None = None,
                 camera: str | None = None) -> np.ndarray:
         """An RGB image of the last episode as it ended, from ``camera`` (``None``: for the
