@@ -120,7 +120,7 @@ def main() -> None:
                     cluster.add_node(**NODE)
                     cluster.wait_for_nodes()
                 t0 = time.perf_counter()
-                check_joinable(cluster.address, LOOPBACK)
+                check_joinable(cluster.address)
                 join_s = time.perf_counter() - t0
                 out = root / f"ray-{repeat}"
                 wall, at_loss, lost_s = lose_a_node(cluster, out, args.tasks, args.trials)

@@ -91,11 +91,12 @@ class RayExecutor:
     def __init__(self, options: ExecutorOptions) -> None:
         # Read once, when Ray is first imported; a user's own setting is kept.
         os.environ.setdefault("RAY_DISABLE_FAILURE_SIGNAL_HANDLER", "1")
-        # This driver's node address: on loopback for a cluster it starts or joins there
-        # (Ray would put both on this machine's network address).
-        self._node = node_address(options.address if options.address is not None
-                                  else os.environ.get("RAY_ADDRESS"))
-        if self._node is not None:
+        # On loopback for a cluster it starts or joins there: Ray would start the one on
+        # this machine's network address, and dial the other there. Joining, the driver
+        # takes the address of the cluster's node that Ray finds on this machine (its
+        # raylet): 127.0.0.1 for a cluster on loopback.
+        if node_address(options.address if options.address is not None
+                        else os.environ.get("RAY_ADDRESS")) is not None:
             use_loopback()
         try:
             import ray
@@ -179,18 +180,13 @@ class RayExecutor:
         kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": True,
                                   "logging_level": logging.WARNING, "configure_logging": False}
         address = self.options.address
-        if address is not None and self._node is not None:
-            # Joined on the cluster's own loopback address. A cluster this driver starts
-            # takes 127.0.0.1 by Ray's loopback switch alone: ray.init() without an
-            # address joins a cluster `ray start` left running, wherever its nodes are.
-            kwargs["_node_ip_address"] = self._node
         if not log.isEnabledFor(logging.DEBUG):
             # Ray's start-up notes would interleave with the progress bar; errors still show.
             logging.getLogger("ray").setLevel(logging.ERROR)
         try:
             if address is not None:
                 _check_reachable(address)
-                check_joinable(address, self._node)
+                check_joinable(address)
                 _init(ray, address=address, **kwargs)
             else:
                 workers = self.options.workers
@@ -291,21 +287,19 @@ def _line(exc: BaseException) -> str:
 _PROBE_S = 5.0
 #: Seconds a trial join of a Ray cluster may take before it is called unjoinable.
 JOIN_S = 60.0
-_JOIN = ("import sys, ray; ray.init(address=sys.argv[1], _node_ip_address=sys.argv[2] or None, "
-         "include_dashboard=False, log_to_driver=False, configure_logging=False); "
-         "ray.shutdown()")
+_JOIN = ("import sys, ray; ray.init(address=sys.argv[1], include_dashboard=False, "
+         "log_to_driver=False, configure_logging=False); ray.shutdown()")
 
 
-def check_joinable(address: str, node: str | None) -> None:
+def check_joinable(address: str) -> None:
     """:class:`ConnectionError` unless a throwaway process joins the cluster at
-    ``address`` within :data:`JOIN_S` seconds, as the driver will (node address ``node``,
-    ``None`` for Ray's choice; it inherits the driver's environment, so Ray's loopback
-    switch too): a port that answers is not yet a cluster this machine can join (one
-    bound to another host's loopback accepts the connection, and Ray then waits for
-    minutes)."""
+    ``address`` within :data:`JOIN_S` seconds, as the driver will (it inherits the
+    driver's environment, Ray's loopback switch included): a port that answers is not yet
+    a cluster this machine can join (one bound to another host's loopback accepts the
+    connection, and Ray then waits for minutes)."""
     try:
-        probe = subprocess.run([sys.executable, "-c", _JOIN, address, node or ""],
-                               capture_output=True, text=True, timeout=JOIN_S)
+        probe = subprocess.run([sys.executable, "-c", _JOIN, address], capture_output=True,
+                               text=True, timeout=JOIN_S)
     except subprocess.TimeoutExpired:
         raise ConnectionError(f"could not join it within {JOIN_S:g} s (is the cluster's "
                               "node address reachable from here?)") from None
