@@ -131,6 +131,8 @@ def main() -> None:
     parser.add_argument("--check", action="store_true",
                         help="exit 1 when any figure is stale, unversioned or names no script")
     args = parse_args(parser)
+    if not args.readme.is_file():
+        sys.exit(f"--readme {args.readme}: no such file")
     current = project_version()
     figures = inventory(args.readme.read_text(encoding="utf-8"))
     failing = 0

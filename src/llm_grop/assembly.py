@@ -222,6 +222,12 @@ def resolve_feasibility(s: RunSettings, simulator: Simulator | None = None) -> R
     :meth:`~llm_grop.simulation.base.Simulator.fitted_profile`), so that the run JSON
     and an experiment's identity name the profile the planner used."""
     if s.feasibility != AUTO:
+        from llm_grop.errors import BadInput
+        from llm_grop.files.profiles import profile_names
+
+        if s.feasibility not in profile_names():
+            raise BadInput(f"unknown profile {s.feasibility!r}; choose from "
+                           f"{', '.join([AUTO, *profile_names()])}", param="feasibility")
         return s
     sim = simulator if simulator is not None else make_simulator(s)
     return s.with_values(feasibility=sim.fitted_profile())

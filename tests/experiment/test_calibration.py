@@ -108,3 +108,11 @@ def test_auto_follows_the_simulator() -> None:
     assert resolve_feasibility(RunSettings(), MujocoSimulator()).feasibility == "mujoco"
     named = RunSettings(simulator="mujoco", feasibility="default")
     assert resolve_feasibility(named).feasibility == "default"
+
+
+def test_an_unknown_profile_names_auto_among_the_choices() -> None:
+    from llm_grop.assembly import resolve_feasibility
+    from llm_grop.settings import RunSettings
+
+    with pytest.raises(BadInput, match="unknown profile 'nope'; choose from auto, default"):
+        resolve_feasibility(RunSettings(feasibility="nope"))
