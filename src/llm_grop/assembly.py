@@ -34,6 +34,7 @@ from llm_grop.world.tasks import Task
 
 if TYPE_CHECKING:
     from llm_grop.llm.auto import AutoChoice
+    from llm_grop.recording.episode import Episode
     from llm_grop.simulation.base import Simulator
 
 log = logging.getLogger(__name__)
@@ -214,6 +215,23 @@ def make_simulator(s: RunSettings) -> Simulator:
     from llm_grop.simulation.registry import create_simulator
 
     return create_simulator(s.simulator, dict(s.sim_options), grasp=s.grasp, truth=s.truth)
+
+
+def check_recordings(s: RunSettings) -> None:
+    """:class:`~llm_grop.errors.BadInput` when a recording the record ``s`` asks for
+    cannot be written (its extra missing, a path that cannot be written), before any
+    work."""
+    from llm_grop.recording.episode import check_recording
+
+    check_recording("rerun", s.rerun)
+
+
+def open_recordings(s: RunSettings) -> Episode | None:
+    """The episode stream to the recordings the record ``s`` asks for (``None``: none),
+    each file opened now; the caller closes it."""
+    from llm_grop.recording.episode import open_episode
+
+    return open_episode(rerun=s.rerun)
 
 
 def named_llm(llm: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
