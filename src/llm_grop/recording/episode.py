@@ -134,6 +134,15 @@ def _yaw_quat(yaw: float) -> tuple[float, float, float, float]:
     return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
 
 
+def check_extra(kind: str) -> None:
+    """:class:`BadInput` naming the setting ``kind`` (``rerun``) when the library that
+    writes its recordings is not installed (found without importing it)."""
+    import importlib.util
+
+    if importlib.util.find_spec(kind) is None:
+        raise BadInput(f"needs the optional {EXTRAS[kind]}", param=kind)
+
+
 def check_recording(kind: str, path: str | os.PathLike[str] | None) -> None:
     """:class:`BadInput` naming the setting ``kind`` (``rerun``) when its recording cannot
     be written to ``path``: the library's extra is not installed, the name lacks its
@@ -141,12 +150,9 @@ def check_recording(kind: str, path: str | os.PathLike[str] | None) -> None:
     work."""
     if path is None:
         return
-    import importlib.util
-
     suffix = {"rerun": ".rrd"}[kind]
     p = Path(path)
-    if importlib.util.find_spec(kind) is None:
-        raise BadInput(f"needs the optional {EXTRAS[kind]}", param=kind)
+    check_extra(kind)
     if p.suffix.lower() != suffix:
         raise BadInput(f"{p}: a recording's name ends in {suffix}", param=kind)
     parent = p.expanduser().resolve().parent
