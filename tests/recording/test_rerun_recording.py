@@ -158,8 +158,9 @@ def test_an_unwritable_recording_is_refused_before_any_work(tmp_path: Path, caps
 
 def test_without_the_extra_rerun_is_one_line(tmp_path: Path) -> None:
     # As where the [viz] extra is not installed: Python finds no rerun package.
-    code = ("import sys; sys.modules['rerun'] = None; from llm_grop.entry import main; "
-            f"main({['run', '--task', '8', *REPLAY, '--rerun', str(tmp_path / 'r.rrd')]!r})")
+    args = ["run", "--task", "8", *REPLAY, "--rerun", str(tmp_path / "r.rrd")]
+    code = ("import sys; sys.modules['rerun'] = None; from llm_grop.cli import main; "
+            f"sys.exit(main({args!r}))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=120)
     assert done.returncode == 2, done.stderr

@@ -5,6 +5,7 @@ of a run: the viewer names it and lays out views of its entities. The screenshot
 
 from __future__ import annotations
 
+import contextlib
 import subprocess
 import sys
 import time
@@ -79,10 +80,8 @@ def strings(data: bytes) -> list[str]:
             return False
         for a, b in out:
             if not (b > a and walk(a, b)):
-                try:
+                with contextlib.suppress(UnicodeDecodeError):
                     found.append(data[a:b].decode("utf-8"))
-                except UnicodeDecodeError:
-                    pass
         return True
 
     walk(0, len(data))
