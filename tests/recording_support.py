@@ -48,10 +48,13 @@ class Recording:
         self.static: set[str] = set()
         for chunk in reader.store().stream():
             batch = chunk.to_record_batch()
-            if chunk.is_static():
+            if chunk.is_static:
                 self.static.add(chunk.entity_path)
             for name in batch.schema.names:
-                self.columns[chunk.entity_path][name] += batch.column(name).to_pylist()
+                column = batch.column(name)
+                if name in ("sim_time", "log_time"):  # nanoseconds
+                    column = column.cast("int64")
+                self.columns[chunk.entity_path][name] += column.to_pylist()
 
     @property
     def entities(self) -> set[str]:
@@ -59,8 +62,7 @@ class Recording:
 
     def times(self, entity: str) -> list[float]:
         """The ``sim_time`` of each row of ``entity``, seconds."""
-        return [t.total_seconds() if hasattr(t, "total_seconds") else t / 1e9
-                for t in self.columns[entity]["sim_time"]]
+        return [t / 1e9 for t in self.columns[entity]["sim_time"]]
 
     def column(self, entity: str, name: str) -> list[Any]:
         return self.columns[entity][name]

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -137,7 +138,7 @@ def test_a_simulator_never_loads_rerun() -> None:
             "llm_grop.simulation.kinematic2d, llm_grop.recording.stream; "
             "print('rerun' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120, env={"MUJOCO_GL": "osmesa", "PATH": "/usr/bin:/bin"})
+                          timeout=120, env=os.environ | {"MUJOCO_GL": "osmesa"})
     assert done.stdout.strip() == "False", done.stderr
 
 

@@ -42,6 +42,8 @@ class Episode:
         self.streams: frozenset[str] = frozenset()
         self._pose: Pose2D | None = None
         self._held: dict[str, BodyPose] = {}
+        #: The latest simulated time reported (the end comes no earlier).
+        self._t = 0.0
 
     # -- from the executive -----------------------------------------------------------
     def begin(self, start: EpisodeStart) -> None:
@@ -51,18 +53,22 @@ class Episode:
             s.begin(start)
 
     def step(self, t_s: float, step: ExecutedStep) -> None:
+        self._t = max(self._t, t_s)
         if step.action == "navigate" and "base" not in self.streams:
             self._drive(t_s, step)
         for s in self.sinks:
             s.step(t_s, step)
 
     def end(self, t_s: float, end: EpisodeEnd) -> None:
+        # The sum of the steps' rounded durations may fall a microsecond short of the
+        # session's clock: the end is never before what came before it.
+        t_s = max(t_s, self._t)
         for s in self.sinks:
             s.end(t_s, end)
 
     # -- from the session (or the executive) ------------------------------------------
     def base(self, t_s: float, pose: Pose2D) -> None:
-        self._pose = pose
+        self._pose, self._t = pose, max(self._t, t_s)
         for s in self.sinks:
             s.base(t_s, pose)
 

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 import rerun as rr
+import rerun.blueprint as rrb
 
 from llm_grop.recording.stream import (
     ArmState,
@@ -102,6 +103,7 @@ class RerunSink:
             f"{start.method} task {start.task} seed {start.seed} ({start.simulator})"
             if start.task is not None else f"{start.method} seed {start.seed} "
                                            f"({start.simulator})")
+        self.rec.send_blueprint(_layout(start.streams))
         self._room(start.scene)
         for shape in start.objects:
             self._object(shape)
@@ -283,6 +285,22 @@ class RerunSink:
         log("plan/relations", rr.TextDocument(
             "\n".join(f"- {r.sentence()}" for r in start.relations) or "(none)",
             media_type="text/markdown"), static=True)
+
+
+def _layout(streams: frozenset[str]) -> rrb.Blueprint:
+    """The viewer's layout: the room in 3D beside the plan and the attempts, with the
+    simulator's camera frames and arm joints where it reports them."""
+    side: list[rrb.View | rrb.Tabs] = [
+        rrb.Tabs(rrb.TextDocumentView(origin="/plan", contents="$origin", name="plan"),
+                 rrb.TextDocumentView(origin="/plan/relations", name="relations")),
+        rrb.TextLogView(origin="/events", name="events")]
+    if "camera" in streams:
+        side.insert(0, rrb.Spatial2DView(origin="/cameras", name="cameras"))
+    if "arm" in streams:
+        side.append(rrb.TimeSeriesView(origin="/arm", name="arm"))
+    return rrb.Blueprint(rrb.Horizontal(rrb.Spatial3DView(origin="/world", name="room"),
+                                        rrb.Vertical(*side), column_shares=[3, 2]),
+                         collapse_panels=False)
 
 
 def _times(rows: Sequence[tuple[float, object]] | Sequence[tuple[float, ...]]

@@ -61,7 +61,8 @@ class Reporter:
             obs.scan(last[0], Scan(last[1], lo.height_m, 0.0, self.increment, lo.range_m,
                                    tuple(float(r) for r in last[2])))
         if self.cameras and t >= self.next_frame:
-            self.next_frame = t + self.o.record_camera_s
+            # Half a report early, so that rounding never skips a report.
+            self.next_frame = t + self.o.record_camera_s - 0.5 * self.o.record_dt_s
             self._frames(w, t)
 
     def _frames(self, w: World, t: float) -> None:

@@ -165,7 +165,9 @@ class World:
             self._next_frame = self.d.time + self.frame_dt
             self.on_frame(self)
         if self.observe is not None and self.d.time >= self._next_observe:
-            self._next_observe = self.d.time + self.observe_dt
+            # Half a control period early, so that rounding never skips a period.
+            self._next_observe = self.d.time + self.observe_dt \
+                - 0.5 * self.m.opt.timestep * CONTROL_STEPS
             self.observe(self)
 
     # -- the grip ---------------------------------------------------------------------
