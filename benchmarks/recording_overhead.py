@@ -5,7 +5,9 @@ seeds 0..N-1 in each simulator, each seed twice, without and with a recording, i
 (which goes first alternates from seed to seed, so that a slow spell of the machine falls
 on both). Prints, per simulator, the median wall time of a whole episode (arrange, plan,
 execute, the recording written) without and with the recording, the median of each
-seed's overhead in per cent of its episode without, and the recordings' sizes.
+seed's overhead in per cent of its episode without, the same for the process's CPU time
+(its threads included: Rerun encodes and writes on threads of its own; on a machine
+other work shares, CPU time varies less than wall time), and the recordings' sizes.
 Run: .venv/bin/python benchmarks/recording_overhead.py [--seeds 5] [--task 8]
      [--simulators kinematic2d,mujoco] [--quick]
 """
@@ -24,12 +26,12 @@ from llm_grop.assembly import make_simulator
 from llm_grop.settings import DEFAULTS
 
 
-def episode(task: int, seed: int, sim: object, rrd: Path | None) -> float:
-    """Wall seconds of one episode, recorded to ``rrd`` when given."""
-    t0 = time.perf_counter()
+def episode(task: int, seed: int, sim: object, rrd: Path | None) -> tuple[float, float]:
+    """Wall and CPU seconds of one episode, recorded to ``rrd`` when given."""
+    t0, c0 = time.perf_counter(), time.process_time()
     run(task=task, seed=seed, llm=replay_llm(), simulator=sim,
         rerun=str(rrd) if rrd is not None else None)
-    return time.perf_counter() - t0
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
 def main() -> None:
@@ -46,26 +48,30 @@ def main() -> None:
     for name in args.simulators.split(","):
         sim = make_simulator(DEFAULTS.with_values(simulator=name))
         episode(args.task, 0, sim, None)  # warm: imports, the arm's IK model, caches
-        plain, recorded, overhead, sizes = [], [], [], []
+        plain, recorded, overhead, cpu, sizes = [], [], [], [], []
         for seed in range(args.seeds):
             rrd = where / f"{name}-{seed}.rrd"
             if seed % 2:
-                with_s = episode(args.task, seed, sim, rrd)
-                without_s = episode(args.task, seed, sim, None)
+                (with_s, with_cpu) = episode(args.task, seed, sim, rrd)
+                (without_s, without_cpu) = episode(args.task, seed, sim, None)
             else:
-                without_s = episode(args.task, seed, sim, None)
-                with_s = episode(args.task, seed, sim, rrd)
+                (without_s, without_cpu) = episode(args.task, seed, sim, None)
+                (with_s, with_cpu) = episode(args.task, seed, sim, rrd)
             plain.append(without_s)
             recorded.append(with_s)
             overhead.append(100 * (with_s - without_s) / without_s)
+            cpu.append(100 * (with_cpu - without_cpu) / without_cpu)
             sizes.append(rrd.stat().st_size / 1e6)
             print(f"  {name} seed {seed}: {without_s:.2f} s without, {with_s:.2f} s with "
-                  f"({overhead[-1]:+.1f} %), {sizes[-1]:.2f} MB")
+                  f"({overhead[-1]:+.1f} %); CPU {without_cpu:.2f} s, {with_cpu:.2f} s "
+                  f"({cpu[-1]:+.1f} %); {sizes[-1]:.2f} MB")
         print(f"{name}: episode wall time median {statistics.median(plain):.2f} s without, "
               f"{statistics.median(recorded):.2f} s with a recording; overhead median "
               f"{statistics.median(overhead):+.1f} % (min {min(overhead):+.1f}, max "
-              f"{max(overhead):+.1f}); recording {statistics.median(sizes):.2f} MB median "
-              f"({min(sizes):.2f} to {max(sizes):.2f})")
+              f"{max(overhead):+.1f}); CPU time overhead median "
+              f"{statistics.median(cpu):+.1f} % (min {min(cpu):+.1f}, max {max(cpu):+.1f}); "
+              f"recording {statistics.median(sizes):.2f} MB median ({min(sizes):.2f} to "
+              f"{max(sizes):.2f})")
 
 
 if __name__ == "__main__":

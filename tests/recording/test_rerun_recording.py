@@ -106,7 +106,7 @@ def test_a_mujoco_episode_also_records_the_arm_lidar_and_a_camera(tmp_path: Path
     scans = rec.column("/world/scan", "Points3D:positions")
     assert len(scans) > 50 and max(len(s) for s in scans) > 100
     frames = rec.times(entity("cameras", "robot"))
-    assert len(frames) >= run["execution_time_s"] / 2 - 2
+    assert len(frames) >= run["execution_time_s"] / 5 - 2  # one every 5 simulated s
 
 
 def test_a_recording_changes_nothing_in_the_run(tmp_path: Path) -> None:

@@ -75,14 +75,14 @@ class Scan:
     """One sweep of the base's planar lidar, as ROS's ``sensor_msgs/LaserScan`` has it:
     the scanner at ``pose`` (room frame) ``height_m`` above the floor, ray ``k`` at
     ``angle_min_rad + k * angle_increment_rad`` from the base's heading, its range in
-    metres (``math.inf``: nothing within ``range_max_m``)."""
+    metres (``inf``: nothing within ``range_max_m``), one ``float`` array."""
 
     pose: Pose2D
     height_m: float
     angle_min_rad: float
     angle_increment_rad: float
     range_max_m: float
-    ranges_m: tuple[float, ...]
+    ranges_m: np.ndarray = field(compare=False, repr=False)
 
     def points(self) -> np.ndarray:
         """Where the rays hit, ``(N, 2)`` room-frame points (metres); misses left out."""

@@ -137,7 +137,7 @@ class MujocoOptions:
     camera: Camera | None = None
     record_dt_s: float = 0.2
     record_cameras: tuple[Camera, ...] = ("robot",)
-    record_camera_s: float = 2.0
+    record_camera_s: float = 5.0
     record_image_size: tuple[int, int] = (160, 120)
 
     # The front doors check a user's options with pydantic; unknown keys are refused.

@@ -10,7 +10,6 @@ import logging
 import math
 
 import mujoco
-import numpy as np
 
 from llm_grop.errors import BadInput
 from llm_grop.recording.stream import ArmState, BodyPose, CameraFrame, Scan, SensorObserver
@@ -47,19 +46,19 @@ class Reporter:
     def __call__(self, w: World) -> None:
         t, d, obs = float(w.d.time), w.d, self.observer
         obs.base(t, w.base_pose())
-        obs.bodies(t, [BodyPose(name, *(float(v) for v in d.xpos[b]),
-                                _xyzw(d.xquat[b]), name == w.held)
-                       for name, b in zip(self.names, self.bodies, strict=True)])
-        q = w.arm_q()
-        obs.arm(t, ArmState(tuple((j, float(a)) for j, a in zip(ARM_JOINTS, q, strict=True)),
-                            tuple(tuple(float(v) for v in d.xpos[b]) for b in self.links),
+        xyz, wxyz = d.xpos[self.bodies].tolist(), d.xquat[self.bodies].tolist()
+        obs.bodies(t, [BodyPose(name, x, y, z, (qx, qy, qz, qw), name == w.held)
+                       for name, (x, y, z), (qw, qx, qy, qz)
+                       in zip(self.names, xyz, wxyz, strict=True)])
+        obs.arm(t, ArmState(tuple(zip(ARM_JOINTS, w.arm_q().tolist(), strict=True)),
+                            tuple(map(tuple, d.xpos[self.links].tolist())),
                             w.finger_opening()))
         last = w.lidar.last
         if last is not None and last[0] > self.scanned:
             self.scanned = last[0]
             lo = w.lidar.o
             obs.scan(last[0], Scan(last[1], lo.height_m, 0.0, self.increment, lo.range_m,
-                                   tuple(float(r) for r in last[2])))
+                                   last[2]))
         if self.cameras and t >= self.next_frame:
             # Half a report early, so that rounding never skips a report.
             self.next_frame = t + self.o.record_camera_s - 0.5 * self.o.record_dt_s
@@ -83,8 +82,3 @@ class Reporter:
         if self.renderer is not None:
             self.renderer.close()
             self.renderer = None
-
-
-def _xyzw(wxyz: np.ndarray) -> tuple[float, float, float, float]:
-    """MuJoCo's ``(w, x, y, z)`` quaternion as ``(x, y, z, w)``."""
-    return (float(wxyz[1]), float(wxyz[2]), float(wxyz[3]), float(wxyz[0]))
