@@ -94,7 +94,8 @@ def test_a_2d_episode_is_recorded_on_simulated_time(tmp_path: Path) -> None:
 
 
 def test_a_mujoco_episode_also_records_the_arm_lidar_and_a_camera(tmp_path: Path) -> None:
-    run, rec = _run(tmp_path, "--simulator", "mujoco", "--seed", "1")
+    run, rec = _run(tmp_path, "--simulator", "mujoco", "--seed", "1",
+                    "--sim-option", "record_cameras=[robot]")
     assert run["simulator"] == "mujoco"
     _common(run, rec)
     arm = rec.times("/world/arm")

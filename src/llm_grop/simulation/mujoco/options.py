@@ -117,7 +117,8 @@ class MujocoOptions:
         record_dt_s: simulated seconds between two reports of the base, the objects, the
             arm and the lidar to an episode's recording.
         record_cameras: the cameras (:data:`CAMERAS`) whose frames a recording holds
-            (empty: none).
+            (empty, the default: none; each frame is an offscreen render, which costs
+            more than the rest of a recording).
         record_camera_s: simulated seconds between two of a recording's camera frames.
         record_image_size: width and height of a recording's camera frames, pixels.
     """
@@ -136,7 +137,7 @@ class MujocoOptions:
     video_fps: int = 25
     camera: Camera | None = None
     record_dt_s: float = 0.2
-    record_cameras: tuple[Camera, ...] = ("robot",)
+    record_cameras: tuple[Camera, ...] = ()
     record_camera_s: float = 5.0
     record_image_size: tuple[int, int] = (160, 120)
 
