@@ -1,4 +1,5 @@
-"""What a Rerun recording costs: its size and the wall-time overhead of ``--rerun``.
+"""What a Rerun recording costs: its size and the wall-time overhead of ``--rerun`` (and,
+with ``--mcap``, of a ROS 2 bag).
 
 Runs Task 8 (``--task``) with LLM-GROP (the embedded model's recorded answers, 1 chair) on
 seeds 0..N-1 in each simulator, each seed twice, without and with a recording, in turns
@@ -26,11 +27,13 @@ from llm_grop.assembly import make_simulator
 from llm_grop.settings import DEFAULTS
 
 
-def episode(task: int, seed: int, sim: object, rrd: Path | None) -> tuple[float, float]:
-    """Wall and CPU seconds of one episode, recorded to ``rrd`` when given."""
+def episode(task: int, seed: int, sim: object, out: Path | None) -> tuple[float, float]:
+    """Wall and CPU seconds of one episode, recorded to ``out`` when given (a Rerun
+    recording or a ROS 2 bag, by its suffix)."""
+    kind = {".rrd": "rerun", ".mcap": "mcap"}.get(out.suffix) if out is not None else None
     t0, c0 = time.perf_counter(), time.process_time()
     run(task=task, seed=seed, llm=replay_llm(), simulator=sim,
-        rerun=str(rrd) if rrd is not None else None)
+        **({kind: str(out)} if kind is not None and out is not None else {}))
     return time.perf_counter() - t0, time.process_time() - c0
 
 
@@ -39,18 +42,20 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--task", type=int, default=8)
     ap.add_argument("--simulators", default="kinematic2d,mujoco")
+    ap.add_argument("--mcap", action="store_true", help="time a ROS 2 bag (--mcap) instead")
     args = parse_args(ap, {"seeds": 1, "task": 1})
     where = scratch("recordings")
     import rerun
 
-    print(f"rerun-sdk {rerun.__version__}; Task {args.task} x {args.seeds} seeds, LLM-GROP, "
+    print(f"{'a ROS 2 bag (--mcap)' if args.mcap else 'a Rerun recording (--rerun)'}; "
+          f"rerun-sdk {rerun.__version__}; Task {args.task} x {args.seeds} seeds, LLM-GROP, "
           "the embedded model's answers replayed")
     for name in args.simulators.split(","):
         sim = make_simulator(DEFAULTS.with_values(simulator=name))
         episode(args.task, 0, sim, None)  # warm: imports, the arm's IK model, caches
         plain, recorded, overhead, cpu, sizes = [], [], [], [], []
         for seed in range(args.seeds):
-            rrd = where / f"{name}-{seed}.rrd"
+            rrd = where / f"{name}-{seed}.{'mcap' if args.mcap else 'rrd'}"
             if seed % 2:
                 (with_s, with_cpu) = episode(args.task, seed, sim, rrd)
                 (without_s, without_cpu) = episode(args.task, seed, sim, None)

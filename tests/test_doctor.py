@@ -31,7 +31,7 @@ from llm_grop.doctor.probes import check_mujoco_gl, llama_build_check
 from llm_grop.doctor.server import check_server
 
 NAMES = ["python", "llama.cpp", "embedded model", "mujoco gl", "chromium", "extra ratings",
-         "extra ray", "extra serve", "extra viz", "openai server", "llm auto"]
+         "extra ray", "extra serve", "extra viz", "extra ros", "openai server", "llm auto"]
 LINE = re.compile(r"^(ok|warn|FAIL|skip) {2,}(\S+(?: \S+)?) {2,}(.*)$")
 
 

@@ -224,6 +224,7 @@ def check_recordings(s: RunSettings) -> None:
     from llm_grop.recording.episode import check_recording
 
     check_recording("rerun", s.rerun)
+    check_recording("mcap", s.mcap)
 
 
 def open_recordings(s: RunSettings) -> Episode | None:
@@ -231,7 +232,7 @@ def open_recordings(s: RunSettings) -> Episode | None:
     each file opened now; the caller closes it."""
     from llm_grop.recording.episode import open_episode
 
-    return open_episode(rerun=s.rerun)
+    return open_episode(rerun=s.rerun, mcap=s.mcap)
 
 
 def named_llm(llm: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:

@@ -230,8 +230,8 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
                                keep_chairs=settings.chairs is None)
     _check_tasks(tasks, known, settings, sim, scene)
     return Experiment(tasks, trials, methods, TrialSettings(
-        settings.with_values(rerun=None), images=None if no_images else str(out_dir / "images"),
-        llm_threads=threads,
+        settings.with_values(rerun=None, mcap=None),
+        images=None if no_images else str(out_dir / "images"), llm_threads=threads,
         recordings=str(out_dir / "recordings") if recordings else None), settings.seed)
 
 

@@ -50,7 +50,7 @@ if TYPE_CHECKING:
               help="--simulator mujoco: the camera of --table-image and --video: top-down, "
                    "diner, robot or room [default: top-down for the table render, room for "
                    "the video].")
-@flags("rerun")
+@flags("rerun", "mcap")
 @flags(*ATTEMPT_FIELDS, *LLM_FIELDS)
 @RECORD
 @flags(*ARRANGE_FIELDS, "cache")
@@ -74,9 +74,10 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
     settings = checked_settings(params, cache=cache_setting(params["cache"], no_cache))
     # Every output is checked before the LLM is paid for or any planning is done.
     rerun_path: Path | None = params["rerun"]
+    mcap_path: Path | None = params["mcap"]
     check_outputs(json=json_path, image=image_path, table_image=table_image,
                   room_image=room_image, video=video_path, record=record_path,
-                  rerun=rerun_path)
+                  rerun=rerun_path, mcap=mcap_path)
     check_recordings(settings)
     if camera is not None and not (table_image or video_path):
         raise BadInput("--camera: needs --table-image or --video (--room-image always "
@@ -90,6 +91,8 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
         if rerun_path is not None:
             # Recorded beside its place too, and moved there with the other outputs.
             settings = settings.with_values(rerun=str(outputs.path("rerun", rerun_path)))
+        if mcap_path is not None:
+            settings = settings.with_values(mcap=str(outputs.path("mcap", mcap_path)))
         with err.status("starting", spinner="dots") as status:
             def on_event(message: str) -> None:
                 if not quiet:
@@ -115,7 +118,8 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
         print_run(result, out, err)
         for label, path in (("run JSON", json_path), ("picture", image_path),
                             ("table render", table_image), ("room render", room_image),
-                            ("video", video_path), ("recording", rerun_path)):
+                            ("video", video_path), ("recording", rerun_path),
+                            ("ROS 2 bag", mcap_path)):
             if path is not None:
                 out.print(f"Wrote {label}: {path}")
 

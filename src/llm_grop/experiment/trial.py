@@ -121,7 +121,8 @@ class TrialRunner:
         recording = f"{_stem(spec)}.rrd" if recordings is not None else None
         settings = self.settings.run.with_values(
             method=spec.method, task=spec.task, seed=spec.seed,
-            rerun=str(recordings / recording) if recordings and recording else None)
+            rerun=str(recordings / recording) if recordings and recording else None,
+            mcap=None)
         llm_log = self.llm() if get_method(spec.method, dict(settings.method_options)
                                            ).arrangement.uses_llm else None
         # A scene that seats several diners sets the task's objects once for each of them.

@@ -28,7 +28,11 @@ log = logging.getLogger(__name__)
 #: while it moves (the 2D one): the drive is drawn along its path at this rate.
 MOTION_DT_S = 0.2
 #: What installs each recording's library (the optional extra, and its size).
-EXTRAS = {"rerun": "[viz] extra (Rerun, about 170 MB): pip install 'llm-grop[viz]'"}
+EXTRAS = {"rerun": "[viz] extra (Rerun, about 170 MB): pip install 'llm-grop[viz]'",
+          "mcap": "[ros] extra (mcap, mcap-ros2-support): pip install 'llm-grop[ros]'"}
+#: The module each recording's library is imported as, and each file's suffix.
+MODULES = {"rerun": "rerun", "mcap": "mcap_ros2"}
+SUFFIXES = {"rerun": ".rrd", "mcap": ".mcap"}
 
 
 class Episode:
@@ -141,11 +145,12 @@ def _yaw_quat(yaw: float) -> tuple[float, float, float, float]:
 
 
 def check_extra(kind: str) -> None:
-    """:class:`BadInput` naming the setting ``kind`` (``rerun``) when the library that
+    """:class:`BadInput` naming the setting ``kind`` (``rerun``, ``mcap``) when the library
+    that
     writes its recordings is not installed (found without importing it)."""
     import importlib.util
 
-    if importlib.util.find_spec(kind) is None:
+    if importlib.util.find_spec(MODULES[kind]) is None:
         raise BadInput(f"needs the optional {EXTRAS[kind]}", param=kind)
 
 
@@ -156,7 +161,7 @@ def check_recording(kind: str, path: str | os.PathLike[str] | None) -> None:
     work."""
     if path is None:
         return
-    suffix = {"rerun": ".rrd"}[kind]
+    suffix = SUFFIXES[kind]
     p = Path(path)
     check_extra(kind)
     if p.suffix.lower() != suffix:
@@ -172,13 +177,24 @@ def check_recording(kind: str, path: str | os.PathLike[str] | None) -> None:
         raise BadInput(f"{p}: the file is not writable", param=kind)
 
 
-def open_episode(*, rerun: str | os.PathLike[str] | None = None) -> Episode | None:
+def open_episode(*, rerun: str | os.PathLike[str] | None = None,
+                 mcap: str | os.PathLike[str] | None = None) -> Episode | None:
     """The episode stream to the recordings asked for (``rerun``: a Rerun recording's
-    path), checked first (:func:`check_recording`); ``None`` when none is."""
+    path, ``mcap``: a ROS 2 bag's), each checked first (:func:`check_recording`);
+    ``None`` when none is."""
+    check_recording("rerun", rerun)
+    check_recording("mcap", mcap)
     sinks: list[Sink] = []
-    if rerun is not None:
-        check_recording("rerun", rerun)
-        from llm_grop.recording.rerun_sink import RerunSink
+    try:
+        if rerun is not None:
+            from llm_grop.recording.rerun_sink import RerunSink
 
-        sinks.append(RerunSink(Path(rerun)))
+            sinks.append(RerunSink(Path(rerun)))
+        if mcap is not None:
+            from llm_grop.recording.mcap_sink import McapSink
+
+            sinks.append(McapSink(Path(mcap)))
+    except BaseException:
+        Episode(sinks).close()
+        raise
     return Episode(sinks) if sinks else None

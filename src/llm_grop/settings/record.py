@@ -270,6 +270,11 @@ class RunSettings(BaseModel):
               "room, the objects and the robot over simulated time, the plan, every attempt; "
               "`llm-grop view FILE.rrd` opens it.", group="record", identity=False,
         door=Door(path="file", metavar="FILE.rrd"))
+    mcap: str | None = setting(
+        None, "Write the episode as a ROS 2 bag here (.mcap; needs the [ros] extra): /tf, "
+              "/plan/path, /plan/goals, /objects, /scan (MuJoCo) and /events in standard "
+              "message types, for `ros2 bag play`, RViz or Foxglove.", group="record",
+        identity=False, door=Door(path="file", metavar="FILE.mcap"))
 
     def __init__(self, **values: Any) -> None:
         """A record of ``values`` (field names), every value checked: the first problem is
