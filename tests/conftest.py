@@ -23,6 +23,9 @@ from typing import Any
 
 import pytest
 
+# MuJoCo reads MUJOCO_GL once, when first imported; the package picks an offscreen backend
+# then, so it must come before any test module imports mujoco itself.
+import llm_grop.simulation.mujoco  # noqa: F401
 from http_support import serving
 
 _ERROR_TYPES = {

@@ -31,7 +31,7 @@ from llm_grop.doctor.probes import check_mujoco_gl, llama_build_check
 from llm_grop.doctor.server import check_server
 
 NAMES = ["python", "llama.cpp", "embedded model", "mujoco gl", "chromium", "extra ratings",
-         "extra ray", "extra serve", "openai server", "llm auto"]
+         "extra ray", "extra serve", "extra viz", "extra ros", "openai server", "llm auto"]
 LINE = re.compile(r"^(ok|warn|FAIL|skip) {2,}(\S+(?: \S+)?) {2,}(.*)$")
 
 
@@ -250,6 +250,7 @@ def test_an_extra_whose_package_is_too_old_warns() -> None:
 
 def test_the_extras_come_from_llm_groups_metadata() -> None:
     assert [r.name for r in extra_requirements("ray")] == ["ray"]
+    assert [r.name for r in extra_requirements("viz")] == ["rerun-sdk"]
     assert {"fastapi", "krippendorff"} <= {r.name for r in extra_requirements("ratings")}
     assert "krippendorff" not in {r.name for r in extra_requirements("serve")}
     assert extra_requirements("no-such-extra") == []

@@ -19,9 +19,11 @@ from llm_grop.assembly import (
     RunInputs,
     arrange_options,
     call_log,
+    check_recordings,
     execution_policy,
     make_simulator,
     named_simulator,
+    open_recordings,
     planner_options,
     resolve_feasibility,
     sampling,
@@ -189,6 +191,7 @@ def run(request: str | None = None, settings: RunSettings | None = None, *,
     simulator, overrides = named_simulator(simulator, overrides)
     execution = overrides.pop("execution", None)
     job = RunInputs.of(settings, llm, scene, overrides)
+    check_recordings(job.settings)  # before any work
     sim = simulator if simulator is not None else make_simulator(job.settings)
     job = replace(job, settings=resolve_feasibility(job.settings, sim))
     planned = _plan(request, job, catalog, on_event, sim.check)
@@ -299,18 +302,24 @@ def execute(planned: PlanResult, settings: RunSettings | None = None, *,
     simulator object ``simulator``): the same run as :func:`run` with the same settings.
 
     ``settings`` defaults to the plan's own; ``overrides`` change its fields by name
-    (``simulator="mujoco"``, ``nav_attempts=5``), or give the executive's policy whole
-    (``execution=ExecutionPolicy(...)``, for its place tolerances).
+    (``simulator="mujoco"``, ``nav_attempts=5``, ``rerun="run.rrd"`` to record the
+    episode), or give the executive's policy whole (``execution=ExecutionPolicy(...)``,
+    for its place tolerances).
     """
     from llm_grop.methods.episode import execute_episode
 
     simulator, overrides = named_simulator(simulator, overrides)
     s, bases = settle(settings or planned.settings, overrides)
     sim = simulator if simulator is not None else make_simulator(s)
-    return execute_episode(planned.planned, planned.input, task=planned.task, simulator=sim,
-                           method=planned.method, attempts=planned.manip_attempts,
-                           planner=planned.planner,
-                           policy=execution_policy(s, bases.execution))
+    episode = open_recordings(s)
+    try:
+        return execute_episode(planned.planned, planned.input, task=planned.task,
+                               simulator=sim, method=planned.method,
+                               attempts=planned.manip_attempts, planner=planned.planner,
+                               policy=execution_policy(s, bases.execution), observer=episode)
+    finally:
+        if episode is not None:
+            episode.close()
 
 
 #: A trailing instance number: "dinner fork 2" is of kind "dinner fork".

@@ -34,6 +34,7 @@ from llm_grop.world.tasks import Task
 
 if TYPE_CHECKING:
     from llm_grop.llm.auto import AutoChoice
+    from llm_grop.recording.episode import Episode
     from llm_grop.simulation.base import Simulator
 
 log = logging.getLogger(__name__)
@@ -231,6 +232,24 @@ def resolve_feasibility(s: RunSettings, simulator: Simulator | None = None) -> R
         return s
     sim = simulator if simulator is not None else make_simulator(s)
     return s.with_values(feasibility=sim.fitted_profile())
+
+
+def check_recordings(s: RunSettings) -> None:
+    """:class:`~llm_grop.errors.BadInput` when a recording the record ``s`` asks for
+    cannot be written (its extra missing, a path that cannot be written), before any
+    work."""
+    from llm_grop.recording.episode import check_recording
+
+    check_recording("rerun", s.rerun)
+    check_recording("mcap", s.mcap)
+
+
+def open_recordings(s: RunSettings) -> Episode | None:
+    """The episode stream to the recordings the record ``s`` asks for (``None``: none),
+    each file opened now; the caller closes it."""
+    from llm_grop.recording.episode import open_episode
+
+    return open_episode(rerun=s.rerun, mcap=s.mcap)
 
 
 def named_llm(llm: Any, overrides: dict[str, Any]) -> tuple[Any, dict[str, Any]]:

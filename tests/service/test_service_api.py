@@ -89,7 +89,10 @@ def test_a_run_as_a_job_with_its_events(server: Server) -> None:
         assert job["state"] == "done", job
         openapi_validator("JobAnswer").validate(job)
         contract_validator("run").validate(job["result"])
-        assert set(job["files"]) == {"room.png", "table.png", "table_phone.png"}
+        # Every run is recorded for Rerun where the server has the [viz] extra.
+        assert set(job["files"]) == {"room.png", "table.png", "table_phone.png",
+                                     "episode.rrd"}
+        assert c.get(job["files"]["episode.rrd"]).content[:4] == b"RRF2"
         with c.stream("GET", job["events"]) as events:
             text = "".join(events.iter_text())
     assert "event: progress" in text and "executing the plan" in text

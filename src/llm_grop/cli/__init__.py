@@ -20,6 +20,7 @@ from llm_grop.cli.run import run
 from llm_grop.cli.schema import schema
 from llm_grop.cli.serve import serve
 from llm_grop.cli.sweep import sweep
+from llm_grop.cli.view import view
 from llm_grop.errors import INTERNAL_ERROR_EXIT, LLMGropError, interrupted
 
 
@@ -40,6 +41,7 @@ cli.add_command(schema)
 cli.add_command(plugins)
 cli.add_command(serve)
 cli.add_command(doctor)
+cli.add_command(view)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -129,6 +129,9 @@ BENCH_DEFAULTS: dict[str, Any] = {"tasks_text": "paper", "trials": 20,
     "chairs": "Chairs sampled near the table in every trial [default: the scene's own, "
               "else 1]."})
 @click.option("--no-images", is_flag=True, help="Do not draw each trial's final table.")
+@click.option("--rerun", "rerun_trials", is_flag=True,
+              help="Write each trial's Rerun recording to OUT/recordings/ (needs the [viz] "
+                   "extra; `llm-grop view` opens one).")
 @flags(*ATTEMPT_FIELDS, *LLM_FIELDS, *ARRANGE_FIELDS, "guess")
 @execution_flags
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
@@ -144,7 +147,8 @@ def bench(quiet: bool, **params: Any) -> None:
     executor, threads, cache = execution_settings(**params)
     exp = prepare_experiment(checked_settings(params, cache=cache), tasks_text=params[
         "tasks_text"], trials=params["trials"], methods_text=params["methods_text"],
-        out_dir=out_dir, no_images=params["no_images"], threads=threads)
+        out_dir=out_dir, no_images=params["no_images"], threads=threads,
+        recordings=params["rerun_trials"])
     console = Console(stderr=True)
     t0 = time.perf_counter()
     with TrialProgress(console, quiet, out_dir) as progress:
@@ -166,12 +170,13 @@ def bench(quiet: bool, **params: Any) -> None:
 
 def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
                        methods_text: str, out_dir: Path, no_images: bool,
-                       threads: int | None) -> Experiment:
+                       threads: int | None, recordings: bool = False) -> Experiment:
     """The experiment of ``settings`` (trial 0's seed, the room, the planner, the LLM...)
     over the tasks ``tasks_text``, ``trials`` trials each, of the methods ``methods_text``,
     into ``out_dir``; every input checked (unknown components, tasks, objects and
     preferences, the output directory) before any trial runs. ``threads`` are the embedded
-    model's per worker.
+    model's per worker; with ``recordings`` each trial writes its Rerun recording to
+    ``out_dir/recordings``.
     """
     from llm_grop.assembly import make_backend, make_simulator, resolve_feasibility, resolve_llm
     from llm_grop.experiment.runner import Experiment
@@ -192,6 +197,13 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
         absolute["model"] = _absolute(settings.model)  # a GGUF file
     settings = settings.with_values(**absolute)
     check_out_dir("out", out_dir)  # before any model is loaded or trial run
+    if recordings:
+        from llm_grop.recording.episode import check_extra
+
+        check_extra("rerun")
+        if (out_dir / "recordings").exists() and not (out_dir / "recordings").is_dir():
+            raise BadInput(f"{out_dir / 'recordings'} is a file, where each trial's "
+                           "recording goes; remove it", param="out", value=out_dir)
     if not no_images and (out_dir / "images").exists() and not (out_dir / "images").is_dir():
         raise BadInput(f"{out_dir / 'images'} is a file, where each trial's picture goes; "
                        "remove it or pass --no-images", param="out", value=out_dir)
@@ -219,8 +231,9 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
                                keep_chairs=settings.chairs is None)
     _check_tasks(tasks, known, settings, sim, scene)
     return Experiment(tasks, trials, methods, TrialSettings(
-        settings, images=None if no_images else str(out_dir / "images"),
-        llm_threads=threads), settings.seed)
+        settings.with_values(rerun=None, mcap=None),
+        images=None if no_images else str(out_dir / "images"), llm_threads=threads,
+        recordings=str(out_dir / "recordings") if recordings else None), settings.seed)
 
 
 @overload

@@ -37,6 +37,8 @@ OUTPUT_SUFFIXES: dict[str, tuple[str, str]] = {
     "table_image": (".png", "only PNG pictures are made; use a name ending in .png"),
     "room_image": (".png", "only PNG pictures are made; use a name ending in .png"),
     "video": (".mp4", "the video must be an .mp4 file"),
+    "rerun": (".rrd", "a Rerun recording's name ends in .rrd"),
+    "mcap": (".mcap", "a ROS 2 bag's name ends in .mcap"),
 }
 
 

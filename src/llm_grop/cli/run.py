@@ -50,6 +50,7 @@ if TYPE_CHECKING:
               help="--simulator mujoco: the camera of --table-image and --video: top-down, "
                    "diner, robot or room [default: top-down for the table render, room for "
                    "the video].")
+@flags("rerun", "mcap")
 @flags(*ATTEMPT_FIELDS, *LLM_FIELDS)
 @RECORD
 @flags(*ARRANGE_FIELDS, "cache")
@@ -64,6 +65,7 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
     from rich.console import Console
 
     from llm_grop.api import run as api_run
+    from llm_grop.assembly import check_recordings
     from llm_grop.cli.console import print_run
     from llm_grop.contract.run_json import run_to_dict
     from llm_grop.files.jsonio import write_json
@@ -71,8 +73,12 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
     check_request("run", request, params["task"])
     settings = checked_settings(params, cache=cache_setting(params["cache"], no_cache))
     # Every output is checked before the LLM is paid for or any planning is done.
+    rerun_path: Path | None = params["rerun"]
+    mcap_path: Path | None = params["mcap"]
     check_outputs(json=json_path, image=image_path, table_image=table_image,
-                  room_image=room_image, video=video_path, record=record_path)
+                  room_image=room_image, video=video_path, record=record_path,
+                  rerun=rerun_path, mcap=mcap_path)
+    check_recordings(settings)
     if camera is not None and not (table_image or video_path):
         raise BadInput("--camera: needs --table-image or --video (--room-image always "
                        "uses the room camera)")
@@ -82,6 +88,11 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
         video_tmp = outputs.path("video", video_path) if video_path is not None else None
         sim = _simulator(settings, table_image or room_image or video_path, video_tmp,
                          camera)
+        if rerun_path is not None:
+            # Recorded beside its place too, and moved there with the other outputs.
+            settings = settings.with_values(rerun=str(outputs.path("rerun", rerun_path)))
+        if mcap_path is not None:
+            settings = settings.with_values(mcap=str(outputs.path("mcap", mcap_path)))
         with err.status("starting", spinner="dots") as status:
             def on_event(message: str) -> None:
                 if not quiet:
@@ -107,7 +118,8 @@ def run(request: str | None, json_path: Path | None, image_path: Path | None,
         print_run(result, out, err)
         for label, path in (("run JSON", json_path), ("picture", image_path),
                             ("table render", table_image), ("room render", room_image),
-                            ("video", video_path)):
+                            ("video", video_path), ("recording", rerun_path),
+                            ("ROS 2 bag", mcap_path)):
             if path is not None:
                 out.print(f"Wrote {label}: {path}")
 

@@ -363,6 +363,9 @@ class TrialRow(RunDoc):
     render: Text | None = Field(None, description="a 3D simulator's top-down render of the "
                                                   "final table, relative to the results "
                                                   "directory")
+    recording: Text | None = Field(None, description="the episode's Rerun recording (.rrd, "
+                                                     "bench --rerun), relative to the "
+                                                     "results directory")
     task: Int = Field(description="the task id")
     requested: list[Name] | None = Field(None, description="the task's objects, as the "
                                                           "picture lists them at its top; "

@@ -5,7 +5,7 @@ except a request to the OpenAI-compatible server the user configured.
 Each check returns a :class:`Check`. A ``fail`` is a needed part missing: the Python
 version, a portable llama.cpp build, offscreen OpenGL for MuJoCo, the embedded model's
 file, and a configured server that answers and lists the model. Chromium and the optional
-extras (ratings, ray, serve) only warn.
+extras (ratings, ray, serve, viz, ros) only warn.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ from llm_grop.doctor.check import Check, Status, one_line, pip_command, python_s
 DISTRIBUTION = "llm-grop"
 
 #: The optional extras the doctor checks (``dev`` is the test tools, not a feature).
-EXTRAS = ("ratings", "ray", "serve")
+EXTRAS = ("ratings", "ray", "serve", "viz", "ros")
 
 #: Debian's Chromium, which the rating website's browser tests drive through Playwright.
 CHROMIUM = Path("/usr/bin/chromium")

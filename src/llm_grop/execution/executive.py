@@ -31,6 +31,7 @@ import logging
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from typing import cast
 
 import numpy as np
 
@@ -42,7 +43,8 @@ from llm_grop.execution.judge import (
     table_pose,
 )
 from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS, ExecutionPolicy
-from llm_grop.simulation.base import PathPlanner, Session, Simulator
+from llm_grop.recording.stream import BodyPose, EpisodeObserver
+from llm_grop.simulation.base import ObservedSession, PathPlanner, Session, Simulator
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, Execution, ObjectState, Plan, Point, Reason, Step
@@ -60,20 +62,27 @@ REPEAT_M = 0.005
 
 def execute(simulator: Simulator, plan: Plan, scene: Scene, items: Sequence[Item],
             rng: np.random.Generator, *, replan: PathPlanner,
-            policy: ExecutionPolicy | None = None) -> Execution:
+            policy: ExecutionPolicy | None = None,
+            observer: EpisodeObserver | None = None) -> Execution:
     """Run ``plan`` for ``items`` in a new episode of ``simulator`` in ``scene`` (its chairs
     are the true ones), the simulator's randomness from ``rng``; ``replan`` is the robot's
-    own path planner."""
-    return execute_plan(plan, simulator.session(scene, items, rng, replan=replan), scene,
-                        policy)
+    own path planner. ``observer`` hears every attempt and where everything is after it,
+    and, while attempts run, what the simulator declares it reports (its ``streams``)."""
+    session = simulator.session(scene, items, rng, replan=replan)
+    if observer is not None and simulator.streams:
+        # Declared by the class: its sessions take an observer.
+        cast(ObservedSession, session).watch(observer)
+    return execute_plan(plan, session, scene, policy, observer)
 
 
 def execute_plan(plan: Plan, session: Session, scene: Scene,
-                 policy: ExecutionPolicy | None = None) -> Execution:
+                 policy: ExecutionPolicy | None = None,
+                 observer: EpisodeObserver | None = None) -> Execution:
     """Run ``plan`` on ``session`` (an episode in ``scene``) under ``policy`` and report
-    what physically happened; the session is closed at the end."""
+    what physically happened (each attempt also to ``observer``); the session is closed
+    at the end."""
     try:
-        return _Executive(plan, session, scene, policy or ExecutionPolicy()).run()
+        return _Executive(plan, session, scene, policy or ExecutionPolicy(), observer).run()
     finally:
         session.close()
 
@@ -83,8 +92,8 @@ class _Executive:
     settled, and the attempts each object has left."""
 
     def __init__(self, plan: Plan, session: Session, scene: Scene,
-                 policy: ExecutionPolicy) -> None:
-        self.plan, self.s, self.scene = plan, session, scene
+                 policy: ExecutionPolicy, observer: EpisodeObserver | None = None) -> None:
+        self.plan, self.s, self.scene, self.observer = plan, session, scene, observer
         self.policy = policy.for_method(BASELINE_MANIP_ATTEMPTS)
         self.targets = {p.name: p for p in plan.configuration}
         self.steps: list[ExecutedStep] = []
@@ -102,6 +111,7 @@ class _Executive:
 
     # -- the plan ---------------------------------------------------------------------
     def run(self) -> Execution:
+        self.report()
         steps = self.plan.steps
         for k, step in enumerate(steps):
             name = step.object or ""
@@ -378,4 +388,15 @@ class _Executive:
         log.debug("%s %s: %s (%.1f s)", step.action, step.object or "",
                   "ok" if step.ok else f"failed, {step.reason}: {step.note}", step.duration_s)
         self.steps.append(step)
+        if self.observer is not None:
+            self.observer.step(self.s.time_s, step)
+            self.report()
+
+    def report(self) -> None:
+        """Tell the observer where the base and every object are now."""
+        if self.observer is None:
+            return
+        t = self.s.time_s
+        self.observer.base(t, self.s.robot_pose())
+        self.observer.bodies(t, [BodyPose.of_state(o) for o in self.s.objects().values()])
 

@@ -244,8 +244,9 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
     jobs: list[Job] = []
     skipped: list[int] = []
     for index, cell in enumerate(cells):
-        if cell.experiment.settings.images is not None:
-            Path(cell.experiment.settings.images).mkdir(parents=True, exist_ok=True)
+        for where in (cell.experiment.settings.images, cell.experiment.settings.recordings):
+            if where is not None:
+                Path(where).mkdir(parents=True, exist_ok=True)
         # Trials whose LLM failed are run again; their rows go, and the new ones come.
         mine = [r for r in read_rows(cell.out) if r.status != "llm-failed"]
         done = {row_key(r) for r in mine}
@@ -264,10 +265,11 @@ def _run_locked(cells: Sequence[Cell], executor: Executor, registered: Any,
     try:
         for finished in results:
             cell = cells[finished.cell]
-            images = cell.experiment.settings.images
+            kept = cell.experiment.settings
             for rel, data in finished.pictures:
-                if images is not None:
-                    write_bytes(Path(images) / Path(rel).name, data)
+                where = kept.recordings if rel.endswith(".rrd") else kept.images
+                if where is not None:
+                    write_bytes(Path(where) / Path(rel).name, data)
             append_row(cell.out / ROWS, finished.row)
             ran[finished.cell] += 1
             row = finished.row

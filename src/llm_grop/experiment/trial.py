@@ -65,12 +65,14 @@ class TrialSpec:
 class TrialSettings:
     """What every trial of an experiment shares (picklable, for worker processes): the
     run's settings record (each trial sets its own method, task and seed), where to draw
-    each trial's final table (``images``; ``None``: no pictures) and the embedded model's
+    each trial's final table (``images``; ``None``: no pictures), where to write each
+    trial's Rerun recording (``recordings``; ``None``: none) and the embedded model's
     CPU threads in each worker (``llm_threads``; ``None``: all cores)."""
 
     run: RunSettings = DEFAULTS
     images: str | None = None
     llm_threads: int | None = None
+    recordings: str | None = None
 
     @classmethod
     def of(cls, images: str | None = None, llm_threads: int | None = None,
@@ -106,13 +108,21 @@ class TrialRunner:
             self._backend = make_backend(s, BackendOptions(n_threads=self.settings.llm_threads))
         return call_log(self._backend, cache=s.cache, max_answer_bytes=s.max_answer_bytes)
 
-    def __call__(self, spec: TrialSpec, images: Path | None = None) -> TrialRow:
-        """The trial's row; its pictures go to ``images`` when given, else to the
-        settings' directory (the row names them relative to the results directory either
-        way)."""
+    def __call__(self, spec: TrialSpec, images: Path | None = None,
+                 recordings: Path | None = None) -> TrialRow:
+        """The trial's row; its pictures go to ``images`` and its recording to
+        ``recordings`` when given, else to the settings' directories (the row names them
+        relative to the results directory either way)."""
         task = self.tasks[spec.task]
-        settings = self.settings.run.with_values(method=spec.method, task=spec.task,
-                                                 seed=spec.seed)
+        if recordings is None and self.settings.recordings is not None:
+            recordings = Path(self.settings.recordings)
+        # One recording per trial, named as its pictures are (a path in the record shared
+        # by every trial would have them overwrite each other).
+        recording = f"{_stem(spec)}.rrd" if recordings is not None else None
+        settings = self.settings.run.with_values(
+            method=spec.method, task=spec.task, seed=spec.seed,
+            rerun=str(recordings / recording) if recordings and recording else None,
+            mcap=None)
         llm_log = self.llm() if get_method(spec.method, dict(settings.method_options)
                                            ).arrangement.uses_llm else None
         # A scene that seats several diners sets the task's objects once for each of them.
@@ -142,6 +152,8 @@ class TrialRunner:
             doc = run_doc(result, llm_log=False)
             episode = {k: getattr(doc, k) for k in doc.model_fields_set} | {
                 "status": "ok", "retries": sum(s.attempt > 1 for s in result.execution.steps)}
+            if recording is not None:
+                episode["recording"] = f"recordings/{recording}"
         calls = llm_log.calls if llm_log else []
         rating = rate(episode["final"], requested=requested, catalog=self.catalog)
         extra: dict[str, Any] = {}
@@ -162,11 +174,16 @@ class TrialRunner:
 
     def _render(self, spec: TrialSpec, images: Path) -> str:
         """Save the simulator's top-down render of the final table."""
-        name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}_render.png"
+        name = f"{_stem(spec)}_render.png"
         save_rgb_png(self.simulator.picture("table"), images / name)
         return f"images/{name}"
 
     def _draw(self, spec: TrialSpec, task: Task, final: Arrangement, images: Path) -> str:
-        name = f"task{spec.task}_trial{spec.trial:02d}_{spec.method}.png"
+        name = f"{_stem(spec)}.png"
         draw_arrangement(final, images / name, title="Requested: " + ", ".join(task.objects))
         return f"images/{name}"
+
+
+def _stem(spec: TrialSpec) -> str:
+    """The name of a trial's files without their suffix."""
+    return f"task{spec.task}_trial{spec.trial:02d}_{spec.method}"

@@ -36,8 +36,8 @@ class Job:
 @dataclass(frozen=True)
 class Done:
     """A finished :class:`Job`: its ``cell``, its ``row``, and ``pictures``, each
-    ``(path relative to the results directory, PNG bytes)``, when the worker shipped them
-    rather than writing them."""
+    ``(path relative to the results directory, bytes)``, when the worker shipped its
+    pictures and recording rather than writing them."""
 
     cell: int
     row: TrialRow
@@ -65,11 +65,13 @@ def run_job(job: Job, runners: Runners, *, ship_pictures: bool = False) -> Done:
     With ``ship_pictures`` the trial draws into a temporary directory instead of the
     results directory, and its pictures come back in the :class:`Done`.
     """
-    runner = runners(job.settings)
-    if not ship_pictures or job.settings.images is None:
+    runner, s = runners(job.settings), job.settings
+    if not ship_pictures or s.images is None and s.recordings is None:
         return Done(job.cell, runner(job.spec))
     with tempfile.TemporaryDirectory(prefix="llm-grop-pictures-") as scratch:
-        row = runner(job.spec, images=Path(scratch))
+        row = runner(job.spec, images=Path(scratch) if s.images is not None else None,
+                     recordings=Path(scratch) if s.recordings is not None else None)
         pictures = tuple((rel, (Path(scratch) / Path(rel).name).read_bytes())
-                         for rel in (row.image, row.render) if rel is not None)
+                         for rel in (row.image, row.render, row.recording)
+                         if rel is not None and (Path(scratch) / Path(rel).name).exists())
     return Done(job.cell, row, pictures)

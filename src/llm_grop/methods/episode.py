@@ -18,6 +18,7 @@ from llm_grop.planning.feasibility import FeasibilityModel, feasibility_profile
 from llm_grop.planning.grop import build_plan
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.utility import GropOptions, PlanningContext
+from llm_grop.recording.stream import EpisodeEnd, EpisodeObserver, EpisodeStart, ObjectShape
 from llm_grop.simulation.base import Simulator
 from llm_grop.world.arrangement import Arrangement, Configuration
 from llm_grop.world.plan import Execution, Plan, RunResult
@@ -74,17 +75,28 @@ def navigator(scene: Scene, planner: GropOptions | None = None) -> Navigator:
 def execute_episode(planned: PlannedEpisode, inp: EpisodeInput, *, task: int | None,
                     simulator: Simulator, method: str, attempts: int,
                     planner: GropOptions | None = None,
-                    policy: ExecutionPolicy | None = None) -> RunResult:
+                    policy: ExecutionPolicy | None = None,
+                    observer: EpisodeObserver | None = None) -> RunResult:
     """The second half of an episode: ``planned`` (:func:`plan_episode`) executed by the
     executive on ``simulator``, which decides what really happens, with ``attempts`` per
     pick and place unless ``policy`` sets them; the simulator's randomness comes from the
-    seed's ``simulator`` stream, so the same seed gives the same run."""
+    seed's ``simulator`` stream, so the same seed gives the same run. ``observer`` hears
+    the episode as it runs (:mod:`llm_grop.recording`); it changes nothing in it."""
     plan, scene = planned.plan, planned.scene
     _say(inp, f"executing the plan (configuration {plan.configuration_index}, from 0; "
               f"expected utility {plan.utility:.1f} s) with {simulator.name}")
+    if observer is not None:
+        observer.begin(EpisodeStart(
+            scene, tuple(ObjectShape.of_item(i) for i in inp.items), plan,
+            planned.arrangement.relations, method, task, inp.seed, inp.request,
+            simulator.name, planned.feasibility, simulator.streams))
     execution = execute(simulator, plan, scene, inp.items, seeds.stream(inp.seed, "simulator"),
                         replan=navigator(scene, planner),
-                        policy=(policy or ExecutionPolicy()).for_method(attempts))
+                        policy=(policy or ExecutionPolicy()).for_method(attempts),
+                        observer=observer)
+    if observer is not None:
+        observer.end(execution.execution_time_s, EpisodeEnd(
+            execution.success, execution.execution_time_s, execution.unplaced_reasons))
     arranged = replace(planned.arrangement, placements=plan.configuration)
     return RunResult(method=method, task=task, seed=inp.seed, request=inp.request,
                      planned=arranged, plan=plan, execution=execution,

@@ -225,7 +225,7 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
     out: dict[str, Any] = {"job": job, "permalink": f"/{_PREFIX[job.kind]}/{job.id}",
                            "events": [m for _, _, m in service.jobs.events(job.id)],
                            "arrangement": None, "pictures": [], "video": None,
-                           "summary": None}
+                           "recording": None, "summary": None}
     result = job.result or {}
 
     def web(doc: ArrangementDoc) -> ArrangementDoc:
@@ -268,6 +268,8 @@ def _result(service: Service, job: Job) -> dict[str, Any]:
         picture("render_room.png", "The room rendered in 3D", "MuJoCo: the room")
         if "episode.mp4" in files:
             out["video"] = url + "episode.mp4"
+        if "episode.rrd" in files:
+            out["recording"] = url + "episode.rrd"
     return out
 
 

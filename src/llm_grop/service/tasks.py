@@ -1,6 +1,6 @@
 """What a worker does for each kind of job: the public API called as the CLI calls it,
 with the server's own LLM backends, and the answer as JSON and files (pictures, renders,
-the video)."""
+the video, and, where the server has the [viz] extra, the run's Rerun recording)."""
 
 from __future__ import annotations
 
@@ -24,6 +24,8 @@ Files = dict[str, tuple[str, bytes]]
 #: Most walls, tables, sources or chairs an inline scene may list.
 MAX_SCENE_ITEMS = 100
 PNG = "image/png"
+#: A Rerun recording's media type (Rerun names none of its own).
+RRD = "application/octet-stream"
 
 
 class Backends:
@@ -214,7 +216,11 @@ def _run(body: RunBody, config: ServiceConfig, llms: Backends,
         if renders:
             sim.check_rendering()
         planned = _planned(body, config, llms, on_event, check=sim.check)
-        result = execute(planned, simulator=sim)
+        # Every run is recorded where the server can (the extra is optional); the file is
+        # the server's, never a client's path.
+        recording = Path(tmp) / "episode.rrd" if _records() else None
+        result = execute(planned, simulator=sim,
+                         rerun=str(recording) if recording is not None else None)
         files: Files = _table_pictures(result.final, config.scratch) | {
             "room.png": (PNG, _png(lambda f: draw_run(result, f), config.scratch))}
         if renders:
@@ -226,4 +232,13 @@ def _run(body: RunBody, config: ServiceConfig, llms: Backends,
                                                          config.scratch))
         if films and video.exists():
             files["episode.mp4"] = ("video/mp4", video.read_bytes())
+        if recording is not None and recording.exists():
+            files["episode.rrd"] = (RRD, recording.read_bytes())
     return {"run": run_to_dict(result)}, files
+
+
+def _records() -> bool:
+    """Whether this server writes Rerun recordings (the [viz] extra is installed)."""
+    import importlib.util
+
+    return importlib.util.find_spec("rerun") is not None

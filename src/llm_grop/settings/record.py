@@ -266,6 +266,18 @@ class RunSettings(BaseModel):
                   cli_help="The shared LLM answer cache [default: $LLM_GROP_CACHE_DIR, "
                            "else ~/.cache/llm-grop/llm-calls]."))
 
+    # Recordings of the episode (they change nothing in it)
+    rerun: str | None = setting(
+        None, "Write a Rerun recording of the episode here (.rrd; needs the [viz] extra): the "
+              "room, the objects and the robot over simulated time, the plan, every attempt; "
+              "`llm-grop view FILE.rrd` opens it.", group="record", identity=False,
+        door=Door(path="file", metavar="FILE.rrd"))
+    mcap: str | None = setting(
+        None, "Write the episode as a ROS 2 bag here (.mcap; needs the [ros] extra): /tf, "
+              "/plan/path, /plan/goals, /objects, /scan (MuJoCo) and /events in standard "
+              "message types, for `ros2 bag play`, RViz or Foxglove.", group="record",
+        identity=False, door=Door(path="file", metavar="FILE.mcap"))
+
     def __init__(self, **values: Any) -> None:
         """A record of ``values`` (field names), every value checked: the first problem is
         one :class:`BadInput` naming the field (``param``)."""

@@ -21,6 +21,7 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 
 from llm_grop.errors import BadInput
+from llm_grop.recording.stream import SensorObserver
 from llm_grop.settings.declared import declared_options
 from llm_grop.settings.declared import option_names as declared_names
 from llm_grop.world.arrangement import Item
@@ -92,6 +93,16 @@ class Session(Protocol):
         ...
 
 
+class ObservedSession(Session, Protocol):
+    """A session of a simulator that declares :attr:`Simulator.streams`: it reports what
+    they name to an observer while its attempts run."""
+
+    def watch(self, observer: SensorObserver) -> None:
+        """Report the declared streams to ``observer`` from now on (simulated time is the
+        session's :attr:`time_s`)."""
+        ...
+
+
 class Simulator(ABC):
     """Offers sessions. A simulator, shipped or a plugin's, subclasses this and declares,
     as class attributes, what users may set and what it can do (the way simonw/llm's
@@ -110,6 +121,12 @@ class Simulator(ABC):
       options' ``camera``);
     - :meth:`fitted_profile`: the packaged feasibility profile fitted to what it does,
       which the planner believes under ``--feasibility auto``.
+    - ``streams``: what its sessions report to an episode's observer while an attempt
+      runs (:data:`~llm_grop.recording.stream.STREAMS`: ``base``, ``bodies``, ``arm``,
+      ``scan``, ``camera``); a simulator that declares any has sessions with
+      ``watch(observer)`` (:class:`ObservedSession`). Every simulator's episodes are
+      recorded without: the executive reports each attempt and where everything is after
+      it.
 
     All randomness comes from the ``rng`` given to :meth:`session`.
     """
@@ -119,6 +136,7 @@ class Simulator(ABC):
     supports_pictures: ClassVar[bool] = False
     supports_video: ClassVar[bool] = False
     cameras: ClassVar[tuple[str, ...]] = ()
+    streams: ClassVar[frozenset[str]] = frozenset()
 
     @abstractmethod
     def session(self, scene: Scene, items: Sequence[Item], rng: np.random.Generator, *,

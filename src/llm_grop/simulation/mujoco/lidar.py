@@ -26,6 +26,9 @@ class Lidar:
         self.angles = np.arange(n) * (2 * math.pi / n)
         self._geomid = np.zeros(n, dtype=np.int32)
         self._dist = np.zeros(n, dtype=np.float64)
+        #: The last sweep: simulated time (seconds), the base's pose and each ray's range
+        #: (metres, ``inf`` for a miss), for an episode's observer.
+        self.last: tuple[float, Pose2D, np.ndarray] | None = None
 
     def scan(self, data: mujoco.MjData, pose: Pose2D) -> np.ndarray:
         """Where the rays hit, ``(N, 2)`` room-frame points (metres), for the base at
@@ -38,4 +41,5 @@ class Lidar:
                            self.base_body, self._geomid, self._dist, None, len(a),
                            self.o.range_m)
         hit = (self._geomid >= 0) & (self._dist >= 0) & (self._dist <= self.o.range_m)
+        self.last = (float(data.time), pose, np.where(hit, self._dist, np.inf))
         return origin[:2] + self._dist[hit, None] * vec[hit, :2]

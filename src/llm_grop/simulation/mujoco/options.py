@@ -114,6 +114,13 @@ class MujocoOptions:
         camera: the camera (:data:`CAMERAS`) of the table render and of the video;
             ``None``: ``top-down`` for the table render, ``room`` for the video. The room
             render always uses ``room``.
+        record_dt_s: simulated seconds between two reports of the base, the objects, the
+            arm and the lidar to an episode's recording.
+        record_cameras: the cameras (:data:`CAMERAS`) whose frames a recording holds
+            (empty, the default: none; each frame is an offscreen render, which costs
+            more than the rest of a recording).
+        record_camera_s: simulated seconds between two of a recording's camera frames.
+        record_image_size: width and height of a recording's camera frames, pixels.
     """
 
     base: BaseOptions = field(default_factory=BaseOptions)
@@ -129,6 +136,10 @@ class MujocoOptions:
     video_frame_s: float = 0.2
     video_fps: int = 25
     camera: Camera | None = None
+    record_dt_s: float = 0.2
+    record_cameras: tuple[Camera, ...] = ()
+    record_camera_s: float = 5.0
+    record_image_size: tuple[int, int] = (160, 120)
 
     # The front doors check a user's options with pydantic; unknown keys are refused.
     __pydantic_config__ = ConfigDict(extra="forbid")
@@ -138,6 +149,10 @@ class MujocoOptions:
             raise BadInput(f"unknown grasp {self.grasp!r}; choose from "
                            f"{', '.join(GRASPS)}", param="grasp")
         check_camera(self.camera)
+        for camera in self.record_cameras:
+            check_camera(camera)
+        if self.record_dt_s <= 0 or self.record_camera_s <= 0:
+            raise BadInput("mujoco options: record_dt_s and record_camera_s must be positive")
         if self.nav_noise_var_m2 < 0 or self.heading_noise_std_rad < 0:
             raise BadInput("mujoco options: nav_noise_var_m2 and heading_noise_std_rad must "
                            "not be negative")

@@ -12,10 +12,12 @@ from dataclasses import replace
 import numpy as np
 
 from llm_grop.geometry.motion import arrival_error
+from llm_grop.recording.stream import SensorObserver
 from llm_grop.simulation.base import PathPlanner
 from llm_grop.simulation.mujoco import drive, manipulation
 from llm_grop.simulation.mujoco.options import MujocoOptions
 from llm_grop.simulation.mujoco.render import View, picture
+from llm_grop.simulation.mujoco.reporting import Reporter
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, ObjectState, Point
@@ -44,6 +46,14 @@ class MujocoSession:
         self.on_close = on_close
         #: What the lidar saw at the end of the last drive (room frame, metres).
         self.seen: tuple[Point, ...] = ()
+        self.reporter: Reporter | None = None
+
+    def watch(self, observer: SensorObserver) -> None:
+        """Report the base, the objects, the arm, the lidar and camera frames to
+        ``observer`` while attempts run (see
+        :mod:`~llm_grop.simulation.mujoco.reporting`)."""
+        self.reporter = Reporter(self.w, self.names, self.o, observer)
+        self.w.observe, self.w.observe_dt = self.reporter, self.o.record_dt_s
 
     # -- state ------------------------------------------------------------------------
     @property
@@ -92,7 +102,11 @@ class MujocoSession:
         return picture(self.w, view, size, camera)
 
     def close(self) -> None:
-        """Finish the episode's video, if one is being recorded."""
+        """Finish the episode's video, if one is being recorded, and stop reporting."""
+        if self.reporter is not None:
+            self.w.observe = None
+            self.reporter.close()
+            self.reporter = None
         if self.on_close is not None:
             self.on_close()
             self.on_close = None

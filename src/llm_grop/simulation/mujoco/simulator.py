@@ -19,6 +19,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from llm_grop.errors import BadInput
+from llm_grop.recording.stream import STREAMS
 from llm_grop.simulation.base import PathPlanner, Simulator
 from llm_grop.simulation.mujoco.arm import ArmIK
 from llm_grop.simulation.mujoco.options import CAMERAS, MujocoOptions
@@ -44,6 +45,7 @@ class MujocoSimulator(Simulator):
     supports_pictures = True
     supports_video = True
     cameras = CAMERAS
+    streams = frozenset(STREAMS)
 
     def __init__(self, options: MujocoOptions | None = None, *,
                  on_frame: Callable[[World], None] | None = None) -> None:

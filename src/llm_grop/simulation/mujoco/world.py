@@ -78,6 +78,11 @@ class World:
         self.on_frame: Callable[[World], None] | None = None
         self.frame_dt = frame_dt_s
         self._next_frame = 0.0
+        #: Called with the world every :attr:`observe_dt` simulated seconds (an episode's
+        #: observer, :mod:`~llm_grop.simulation.mujoco.reporting`).
+        self.observe: Callable[[World], None] | None = None
+        self.observe_dt = 0.2
+        self._next_observe = 0.0
         m = self.m
         self.base_qpos = [m.joint(n).qposadr[0] for n in ("base_x", "base_y", "base_yaw")]
         self.arm_qpos = np.array([m.joint(n).qposadr[0] for n in ARM_JOINTS])
@@ -159,6 +164,11 @@ class World:
         if self.on_frame is not None and self.d.time >= self._next_frame:
             self._next_frame = self.d.time + self.frame_dt
             self.on_frame(self)
+        if self.observe is not None and self.d.time >= self._next_observe:
+            # Half a control period early, so that rounding never skips a period.
+            self._next_observe = self.d.time + self.observe_dt \
+                - 0.5 * self.m.opt.timestep * CONTROL_STEPS
+            self.observe(self)
 
     # -- the grip ---------------------------------------------------------------------
     def finger_opening(self) -> float:
