@@ -11,7 +11,7 @@ The file's layout (room frame: metres and radians, the room spans ``[0, width] x
     target: dining table
     source_tables: [kitchen counter]                      # optional
     sources: [{object: mug, table: kitchen counter, position: [x, y]},   # optional
-              {object: dinner plate 2, table: ..., position: [x, y], on: dinner plate}]
+              {object: dinner plate 2, table: ..., position: [x, y], rests_on: dinner plate}]
     chairs: [{center: [x, y], size: [w, d], yaw: 0.0}]    # optional, "chair 1", ...
     chair_band_m: [0.0, 1.0]                              # optional
     robot: {start: [x, y, theta], base_radius_m: 0.3, ...}  # all optional
@@ -103,13 +103,13 @@ class ChairEntry(WallEntry):
 
 
 class SourceEntry(_SceneModel):
-    """Where an object starts; ``on`` names the source it rests on in a pile (same table,
-    same position)."""
+    """Where an object starts; ``rests_on`` names the source it rests on in a pile (same
+    table, same position). Not ``on``: YAML reads a bare ``on`` key as ``true``."""
 
     object: _Name
     table: _Name
     position: _XY
-    on: _Name | None = None
+    rests_on: _Name | None = None
 
 
 class RobotEntry(_SceneModel):
@@ -205,7 +205,8 @@ def parse_scene(text: str, where: str) -> Scene:
             if _overlap(poly, wall):
                 raise fail(path, f"overlaps wall {j + 1}")
 
-    sources = tuple(ObjectSource(s.object, s.table, *s.position, s.on) for s in m.sources)
+    sources = tuple(ObjectSource(s.object, s.table, *s.position, s.rests_on)
+                    for s in m.sources)
     for k, s in enumerate(sources):
         path = f"sources[{k}] ({s.object!r})"
         if s.table not in names:
@@ -223,14 +224,15 @@ def parse_scene(text: str, where: str) -> Scene:
         below = [j for j, other in enumerate(sources[:k]) if other.object == s.on]
         if s.on is not None:
             if not below:
-                raise fail(f"{path}.on", f"no earlier source is {s.on!r}; list what a pile "
-                           "rests on before it")
+                raise fail(f"{path}.rests_on", f"no earlier source is {s.on!r}; list what "
+                           "a pile rests on before it")
             under = sources[below[0]]
             if (under.table, under.x, under.y) != (s.table, s.x, s.y):
-                raise fail(f"{path}.on", f"{s.on!r} starts at ({under.x:g}, {under.y:g}) on "
-                           f"{under.table!r}; an object on it starts at the same spot")
+                raise fail(f"{path}.rests_on", f"{s.on!r} starts at ({under.x:g}, "
+                           f"{under.y:g}) on {under.table!r}; an object on it starts at the "
+                           "same spot")
             if any(other.on == s.on for other in sources[:k]):
-                raise fail(f"{path}.on", f"another source already rests on {s.on!r}")
+                raise fail(f"{path}.rests_on", f"another source already rests on {s.on!r}")
         for j, other in enumerate(sources[:k]):
             if s.object == other.object:
                 raise fail(f"{path}.object", f"listed twice (sources[{j}])")
@@ -342,7 +344,7 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
         # A pile's upper objects say what they rest on; others are written as before.
         "sources": [{"object": s.object, "table": s.table,
                      "position": [rounded(s.x), rounded(s.y)]}
-                    | ({"on": s.on} if s.on is not None else {}) for s in scene.sources],
+                    | ({"rests_on": s.on} if s.on is not None else {}) for s in scene.sources],
         "chairs": chairs,
         "chair_band_m": [rounded(v) for v in scene.chair_band_m],
         "robot": robot,
