@@ -15,7 +15,7 @@ from llm_grop.planning.utility import PlanningContext
 from llm_grop.simulation.kinematic2d import Kinematic2D, Kinematic2DOptions
 from llm_grop.simulation.registry import available_simulators, create_simulator
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.geometry2d import Box
+from llm_grop.world.geometry2d import Box, Pose2D
 from llm_grop.world.plan import Execution, Plan
 from llm_grop.world.request import items_from_names
 from llm_grop.world.robot import Robot
@@ -161,3 +161,28 @@ def test_a_truth_other_than_kinematic2d_s_own_needs_kinematic2d(capsys) -> None:
     assert "--truth mujoco: needs the kinematic2d simulator" in one_line_error(capsys)
     assert main(["run", "a mug", "--truth", "nope", "-q"]) == 2
     assert "--truth: unknown profile 'nope'" in one_line_error(capsys)
+
+
+def test_a_pile_starts_stacked_and_closes_up_when_one_is_picked() -> None:
+    plates = items_from_names(["dinner plate"] * 3, Catalog.load())
+    scene = two_table_room(sources=(
+        ObjectSource("dinner plate", "counter", 0.45, 2.1),
+        ObjectSource("dinner plate 2", "counter", 0.45, 2.1, "dinner plate"),
+        ObjectSource("dinner plate 3", "counter", 0.45, 2.1, "dinner plate 2")))
+    nav = Navigator(scene, scene.robot.base_radius_m)
+    session = sim(1.0, 1.0).session(scene, plates, np.random.default_rng(0), replan=nav)
+    top = scene.table("counter").height
+    start = session.objects()
+    assert [(start[p.name].z, start[p.name].on) for p in plates] == [
+        (top, None), (pytest.approx(top + 0.025), "dinner plate"),
+        (pytest.approx(top + 0.05), "dinner plate 2")]
+    stand = Pose2D(1.0, 2.1, np.pi)
+    assert session.navigate(stand).ok
+    # Plates of a pile are alike: taking the middle one stands for taking the top one,
+    # and the pile closes up.
+    assert session.pick("dinner plate 2").ok
+    after = session.objects()
+    assert after["dinner plate 2"].held
+    assert (after["dinner plate 3"].z, after["dinner plate 3"].on) == (
+        pytest.approx(top + 0.025), "dinner plate")
+    assert (after["dinner plate"].z, after["dinner plate"].on) == (top, None)

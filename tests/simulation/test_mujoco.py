@@ -249,3 +249,32 @@ def test_video_must_be_mp4(capsys, tmp_path: Path) -> None:
     assert main(["run", "a dinner fork", "--method", "grop", "--simulator", "mujoco",
                  "--video", str(tmp_path / "v.gif")]) == 2
     assert ".mp4" in one_line_error(capsys)
+
+
+def test_a_pile_of_plates_and_bowls_settles_where_it_starts() -> None:
+    # Three dinner plates in one pile and two fruit bowls in another, as the supply layout
+    # starts them when many are asked for.
+    scene = two_table_room(sources=(
+        ObjectSource("dinner plate", "counter", 0.45, 2.1),
+        ObjectSource("dinner plate 2", "counter", 0.45, 2.1, "dinner plate"),
+        ObjectSource("dinner plate 3", "counter", 0.45, 2.1, "dinner plate 2"),
+        ObjectSource("fruit bowl", "counter", 0.45, 1.7),
+        ObjectSource("fruit bowl 2", "counter", 0.45, 1.7, "fruit bowl")))
+    items = items_from_names(["dinner plate"] * 3 + ["fruit bowl"] * 2, Catalog.load())
+    session = MujocoSimulator(EXACT).session(scene, items, seeds.stream(0, "simulator"),
+                                             replan=Navigator(scene, 0.3))
+    heights = {i.name: i.spec.height for i in items}
+    try:
+        session.w.advance(1.0)
+        states = session.objects()
+    finally:
+        session.close()
+    for item in items:
+        st = states[item.name]
+        source = scene.source_for(item.name, item.kind)
+        assert source is not None
+        assert st.tilt_rad < 0.05, item.name
+        assert math.dist((st.x, st.y), (source.x, source.y)) < 0.01, item.name
+        assert st.z == pytest.approx(scene.resting_z(item.name, item.kind, heights),
+                                     abs=0.01), item.name
+        assert st.on == source.on, item.name

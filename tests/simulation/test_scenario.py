@@ -11,12 +11,16 @@ import yaml
 from shapely.geometry import Point, Polygon
 from shapely.geometry import box as rect
 
+from llm_grop import seeds
 from llm_grop.errors import BadInput, Infeasible
 from llm_grop.files.scene_file import load_scene, parse_scene, scene_to_dict
+from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.scenario import prepare_episode
+from llm_grop.simulation.supply import supply_layout, sure_reach_m
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Box
+from llm_grop.world.request import for_diners, items_from_names
 from llm_grop.world.scene import Chair, ObjectSource, Scene, SceneTable
 from scenes import two_table_room
 
@@ -103,8 +107,12 @@ def test_objects_that_do_not_fit(catalog: Catalog) -> None:
         SceneTable("dining table", Box(3.0, 2.0, 0.9, 0.6)),
         SceneTable("counter", Box(0.4, 2.0, 0.3, 0.3))))
     prepare_episode(room, _items(catalog, "mug"), 0)
-    with pytest.raises(Infeasible, match="cannot fit 'mug 2' on the supply tables"):
+    with pytest.raises(Infeasible) as err:
         prepare_episode(room, _items(catalog, "mug", "mug"), 0)
+    assert str(err.value) == (
+        "the supply tables hold 1 of the 2 objects: 'mug 2' does not fit: no free spot "
+        "within the arm's sure reach (0.595 m) of the open sides of 'counter' (south, "
+        "north, east)")
 
 
 @pytest.mark.parametrize("seed", range(10))
@@ -176,3 +184,140 @@ def test_waiting_objects_are_within_easy_reach_of_a_standing_position() -> None:
             r = reach([stand], np.array([[source.x, source.y]]))
             p = DEFAULT_FEASIBILITY.manipulation(r, episode.robot)[0, 0]
             assert p >= 0.8, (seed, source)
+
+
+SETTING = ("dinner plate", "dinner fork", "dinner knife", "water cup")
+
+
+def _settings(catalog: Catalog, diners: int) -> tuple[Item, ...]:
+    return for_diners(items_from_names(SETTING, catalog), diners)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_packaged_room_supplies_six_settings(scene: Scene, catalog: Catalog,
+                                                 seed: int) -> None:
+    items = _settings(catalog, 6)
+    episode = prepare_episode(scene, items, seed, chairs=0)
+    by_name = {s.object: s for s in episode.sources}
+    # The six plates wait in one pile, each on the one before.
+    plates = [by_name["dinner plate"], *(by_name[f"dinner plate {k}"] for k in range(2, 7))]
+    assert plates[0].on is None
+    assert [p.on for p in plates[1:]] == ["dinner plate", *(f"dinner plate {k}"
+                                                            for k in range(2, 6))]
+    assert len({(p.table, p.x, p.y) for p in plates}) == 1
+    heights = {i.name: i.spec.height for i in items}
+    table_z = scene.table(plates[0].table).height
+    assert [episode.resting_z(p.object, "dinner plate", heights) for p in plates] == \
+        pytest.approx([table_z + 0.025 * k for k in range(6)])
+    # Whatever does not pile up keeps its own spot, footprints apart.
+    alone = [s for s in episode.sources if s.on is None]
+    assert len(alone) == 19
+    radius = {i.name: _disc(i) for i in items}
+    for k, a in enumerate(alone):
+        for b in alone[:k]:
+            apart = math.hypot(a.x - b.x, a.y - b.y) >= radius[a.object] + radius[b.object]
+            sa, sb = (catalog.resolve(_kind(o.object)).size for o in (a, b))
+            assert apart or abs(a.x - b.x) >= (sa[0] + sb[0]) / 2 \
+                or abs(a.y - b.y) >= (sa[1] + sb[1]) / 2, (a, b)
+
+
+def _kind(name: str) -> str:
+    return name.rstrip("0123456789 ")
+
+
+def _disc(item: Item) -> float:
+    sx, sy = item.spec.size
+    return max(0.06, sx / 2 if item.spec.shape == "circle" else math.hypot(sx, sy) / 2)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_every_spot_is_within_sure_reach_of_a_free_standing_position(
+        scene: Scene, catalog: Catalog, seed: int) -> None:
+    from llm_grop.planning.feasibility import DEFAULT_FEASIBILITY
+    from llm_grop.planning.standing import pickup_pose, reach
+
+    episode = prepare_episode(scene, _settings(catalog, 6), seed, chairs=2)
+    for source in episode.sources:
+        # The planner's own choice of where to stand (it weighs the stance's clearance
+        # too) leaves the pick as sure as for the paper's tasks.
+        stand = pickup_pose(episode, source, episode.robot, DEFAULT_FEASIBILITY)
+        r = reach([stand], np.array([[source.x, source.y]]))
+        assert DEFAULT_FEASIBILITY.manipulation(r, episode.robot)[0, 0] >= 0.8, (seed, source)
+
+
+def test_the_layout_says_where_to_stand(scene: Scene, catalog: Catalog) -> None:
+    items = _settings(catalog, 2)
+    spots = supply_layout(scene, items, seeds.stream(0, "scene"))
+    obstacles = Obstacles(scene, include_chairs=False)
+    for spot in spots:
+        assert spot.side in {"north", "south", "east", "west"}
+        assert spot.approach is not None
+        a, s = spot.approach, spot.source
+        assert obstacles.free(a.x, a.y, scene.robot.base_radius_m)
+        assert math.hypot(a.x - s.x, a.y - s.y) <= sure_reach_m(scene.robot) + 1e-9
+        # The pose faces the object.
+        assert math.atan2(s.y - a.y, s.x - a.x) == pytest.approx(a.theta)
+    # The kitchen counter stands against the north wall: the robot comes from the south
+    # or the east.
+    assert {sp.side for sp in spots if sp.source.table == "kitchen counter"} <= {"south",
+                                                                                 "east"}
+
+
+def test_too_many_settings_are_named_in_one_line(scene: Scene, catalog: Catalog) -> None:
+    many = for_diners(items_from_names(("dinner plate", "mug", "bread", "napkin"),
+                                       catalog), 7)
+    with pytest.raises(Infeasible) as err:
+        prepare_episode(scene, many, 0)
+    text = str(err.value)
+    assert "\n" not in text
+    assert text.startswith("the supply tables hold ")
+    assert " of the 28 objects: " in text
+    assert ("no free spot within the arm's sure reach (0.595 m) of the open sides of "
+            "'kitchen counter' (south, east), 'side table' (north, west), 'sideboard' "
+            "(south, north, west)") in text
+
+
+def test_a_table_too_small_or_shut_in_is_named(catalog: Catalog) -> None:
+    room = replace(two_table_room(), sources=(), source_tables=("counter", "shelf"),
+                   tables=(SceneTable("dining table", Box(3.0, 2.0, 0.9, 0.6)),
+                           SceneTable("counter", Box(0.4, 2.0, 0.3, 0.3)),
+                           SceneTable("shelf", Box(5.85, 3.85, 0.3, 0.3))))
+    with pytest.raises(Infeasible) as err:
+        prepare_episode(room, _items(catalog, "dinner plate"), 0)
+    assert str(err.value) == (
+        "the supply tables hold 0 of the 1 objects: 'dinner plate' does not fit: 'counter' "
+        "is too small for it; 'shelf' is too small for it")
+    with pytest.raises(Infeasible) as err:
+        prepare_episode(room, _items(catalog, "mug", "mug", "mug"), 0)
+    assert "'shelf' has no side where the base (radius 0.3 m) fits" in str(err.value)
+
+
+def test_a_pinned_object_out_of_reach_is_named(catalog: Catalog) -> None:
+    room = two_table_room(sources=(ObjectSource("mug", "counter", 0.2, 2.0),))
+    with pytest.raises(Infeasible) as err:
+        prepare_episode(room, _items(catalog, "mug", "bread"), 0)
+    assert str(err.value) == (
+        "the supply tables hold 1 of the 2 objects: 'mug' starts at (0.2, 2) on 'counter', "
+        "beyond the arm's sure reach (0.595 m) of every free standing position at its open "
+        "sides")
+
+
+def test_piles_respect_the_catalog_stack(scene: Scene, catalog: Catalog) -> None:
+    bowls = _items(catalog, *["fruit bowl"] * 6)
+    episode = prepare_episode(scene, bowls, 0)
+    bottoms = [s for s in episode.sources if s.on is None]
+    assert catalog.resolve("fruit bowl").stack == 4
+    assert [s.object for s in bottoms] == ["fruit bowl", "fruit bowl 5"]
+    mugs = prepare_episode(scene, _items(catalog, "mug", "mug"), 0)
+    assert all(s.on is None for s in mugs.sources)
+
+
+def test_a_pinned_pile_is_kept_and_read_back(catalog: Catalog) -> None:
+    room = two_table_room(sources=(ObjectSource("dinner plate", "counter", 0.45, 2.1),
+                                   ObjectSource("dinner plate 2", "counter", 0.45, 2.1,
+                                                "dinner plate")))
+    episode = prepare_episode(room, _items(catalog, *["dinner plate"] * 3), 0)
+    assert [(s.object, s.x, s.y, s.on) for s in episode.sources] == [
+        ("dinner plate", 0.45, 2.1, None), ("dinner plate 2", 0.45, 2.1, "dinner plate"),
+        ("dinner plate 3", 0.45, 2.1, "dinner plate 2")]
+    assert parse_scene(yaml.dump(scene_to_dict(episode)), "run json") == episode

@@ -250,4 +250,14 @@ def test_a_field_name_with_a_line_break_stays_on_one_line() -> None:
     with pytest.raises(CatalogError) as info:
         Catalog.from_text(text, "c.yaml")
     assert str(info.value) == ("c.yaml: objects[0] ('spork').'x\\ny': unknown key; expected "
-                               "one of name, shape, size, height, synonyms")
+                               "one of name, shape, size, height, synonyms, stack")
+
+
+def test_plates_and_bowls_may_wait_in_piles() -> None:
+    catalog = Catalog.load(use_env=False)
+    assert catalog.resolve("dinner plate").stack == 6
+    assert catalog.resolve("fruit bowl").stack == 4
+    assert catalog.resolve("water cup").stack == 1
+    text = "objects: [{name: spork, shape: box, size: [1, 1], height: 1, stack: 0}]\n"
+    with pytest.raises(CatalogError, match=r"objects\[0\] \('spork'\).stack: "):
+        Catalog.from_text(text, "c.yaml")

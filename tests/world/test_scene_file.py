@@ -194,6 +194,21 @@ COUNTER = "{name: counter, center: [0.4, 2.0], size: [0.5, 1.2]}"
      "sources[0] ('mug').position: inside wall 1"),
     (ROOM + "sources:\n  - {object: mug, table: counter, position: [0.4, 3.99]}\n",
      "sources[0] ('mug').position: (0.4, 3.99) is not on the top of table 'counter'"),
+    (ROOM + "sources:\n  - {object: dinner plate 2, table: counter, position: [0.4, 2.0], "
+     "rests_on: dinner plate}\n",
+     "sources[0] ('dinner plate 2').rests_on: no earlier source is 'dinner plate'; list "
+     "what a pile rests on before it"),
+    (ROOM + "sources:\n  - {object: dinner plate, table: counter, position: [0.4, 2.0]}\n"
+     "  - {object: dinner plate 2, table: counter, position: [0.4, 2.3], rests_on: dinner plate}\n",
+     "sources[1] ('dinner plate 2').rests_on: 'dinner plate' starts at (0.4, 2) on 'counter'; an "
+     "object on it starts at the same spot"),
+    (ROOM + "sources:\n  - {object: dinner plate, table: counter, position: [0.4, 2.0]}\n"
+     "  - {object: dinner plate 2, table: counter, position: [0.4, 2.0], rests_on: dinner plate}\n"
+     "  - {object: dinner plate 3, table: counter, position: [0.4, 2.0], rests_on: dinner plate}\n",
+     "sources[2] ('dinner plate 3').rests_on: another source already rests on 'dinner plate'"),
+    (ROOM + "sources:\n  - {object: dinner plate, table: counter, position: [0.4, 2.0]}\n"
+     "  - {object: mug, table: counter, position: [0.4, 2.0]}\n",
+     "sources[1] ('mug').position: (0.4, 2) is where sources[0] ('dinner plate') starts"),
     # tables
     (_swap("center: [0.4, 2.0]", "center: [2.6, 2.0]"),
      "tables[1] ('counter'): overlaps table 'dining table'"),
@@ -261,3 +276,25 @@ def test_an_empty_chair_list_means_no_chairs(tmp_path: Path) -> None:
     assert run(task=1, method="grop", scene=path, seed=0).scene.chairs == ()
     assert len(run(task=1, method="grop", seed=0).scene.chairs) == 1
     assert scene_to_dict(scene)["chairs"] == []
+
+
+def test_a_pile_of_sources_reads_and_round_trips(tmp_path: Path) -> None:
+    scene = _load(tmp_path, ROOM + """sources:
+  - {object: dinner plate, table: counter, position: [0.4, 2.0]}
+  - {object: dinner plate 2, table: counter, position: [0.4, 2.0], rests_on: dinner plate}
+  - {object: mug, table: counter, position: [0.4, 2.4]}
+""")
+    assert scene.sources == (ObjectSource("dinner plate", "counter", 0.4, 2.0),
+                             ObjectSource("dinner plate 2", "counter", 0.4, 2.0, "dinner plate"),
+                             ObjectSource("mug", "counter", 0.4, 2.4))
+    data = scene_to_dict(scene)
+    # Only a pile's upper objects carry `on`: other sources are written as before.
+    assert [sorted(s) for s in data["sources"]] == [
+        ["object", "position", "table"], ["object", "position", "rests_on", "table"],
+        ["object", "position", "table"]]
+    assert parse_scene(yaml.dump(data), "again") == scene
+    height = scene.table("counter").height
+    heights = {"dinner plate": 0.025, "dinner plate 2": 0.025}
+    assert scene.resting_z("dinner plate 2", "dinner plate", heights) == \
+        pytest.approx(height + 0.025)
+    assert scene.resting_z("dinner plate", "dinner plate", heights) == height

@@ -10,7 +10,8 @@ The file's layout (room frame: metres and radians, the room spans ``[0, width] x
              {name: round table, shape: circle, center: [x, y], diameter: 1.2}]  # or size: [d, d]
     target: dining table
     source_tables: [kitchen counter]                      # optional
-    sources: [{object: mug, table: kitchen counter, position: [x, y]}]   # optional
+    sources: [{object: mug, table: kitchen counter, position: [x, y]},   # optional
+              {object: dinner plate 2, table: ..., position: [x, y], rests_on: dinner plate}]
     chairs: [{center: [x, y], size: [w, d], yaw: 0.0}]    # optional, "chair 1", ...
     chair_band_m: [0.0, 1.0]                              # optional
     robot: {start: [x, y, theta], base_radius_m: 0.3, ...}  # all optional
@@ -102,9 +103,13 @@ class ChairEntry(WallEntry):
 
 
 class SourceEntry(_SceneModel):
+    """Where an object starts; ``rests_on`` names the source it rests on in a pile (same
+    table, same position). Not ``on``: YAML reads a bare ``on`` key as ``true``."""
+
     object: _Name
     table: _Name
     position: _XY
+    rests_on: _Name | None = None
 
 
 class RobotEntry(_SceneModel):
@@ -200,7 +205,8 @@ def parse_scene(text: str, where: str) -> Scene:
             if _overlap(poly, wall):
                 raise fail(path, f"overlaps wall {j + 1}")
 
-    sources = tuple(ObjectSource(s.object, s.table, *s.position) for s in m.sources)
+    sources = tuple(ObjectSource(s.object, s.table, *s.position, s.rests_on)
+                    for s in m.sources)
     for k, s in enumerate(sources):
         path = f"sources[{k}] ({s.object!r})"
         if s.table not in names:
@@ -215,9 +221,24 @@ def parse_scene(text: str, where: str) -> Scene:
                 raise fail(f"{path}.position", f"inside wall {j + 1}")
         if not tables[names.index(s.table)].contains(s.x, s.y, _TOL_M):
             raise fail(f"{path}.position", f"{at} is not on the top of table {s.table!r}")
+        below = [j for j, other in enumerate(sources[:k]) if other.object == s.on]
+        if s.on is not None:
+            if not below:
+                raise fail(f"{path}.rests_on", f"no earlier source is {s.on!r}; list what "
+                           "a pile rests on before it")
+            under = sources[below[0]]
+            if (under.table, under.x, under.y) != (s.table, s.x, s.y):
+                raise fail(f"{path}.rests_on", f"{s.on!r} starts at ({under.x:g}, "
+                           f"{under.y:g}) on {under.table!r}; an object on it starts at the "
+                           "same spot")
+            if any(other.on == s.on for other in sources[:k]):
+                raise fail(f"{path}.rests_on", f"another source already rests on {s.on!r}")
         for j, other in enumerate(sources[:k]):
             if s.object == other.object:
                 raise fail(f"{path}.object", f"listed twice (sources[{j}])")
+            # A pile's objects share its bottom one's spot.
+            if s.on is not None and (s.table, s.x, s.y) == (other.table, other.x, other.y):
+                continue
             if math.hypot(s.x - other.x, s.y - other.y) < _SOURCE_GAP_M:
                 raise fail(f"{path}.position", f"{at} is where sources[{j}] "
                            f"({other.object!r}) starts; keep {100 * _SOURCE_GAP_M:g} cm apart")
@@ -320,8 +341,10 @@ def scene_to_dict(scene: Scene) -> dict[str, Any]:
                    | ({"shape": t.shape} if t.is_round else {}) for t in scene.tables],
         "target": scene.target,
         "source_tables": list(scene.source_tables),
+        # A pile's upper objects say what they rest on; others are written as before.
         "sources": [{"object": s.object, "table": s.table,
-                     "position": [rounded(s.x), rounded(s.y)]} for s in scene.sources],
+                     "position": [rounded(s.x), rounded(s.y)]}
+                    | ({"rests_on": s.on} if s.on is not None else {}) for s in scene.sources],
         "chairs": chairs,
         "chair_band_m": [rounded(v) for v in scene.chair_band_m],
         "robot": robot,

@@ -134,9 +134,10 @@ class Kinematic2DSession:
         for i in items:
             src = scene.source_for(i.name, i.spec.name)
             if src is not None:
-                self.states[i.name] = ObjectState(i.name, src.x, src.y,
-                                                  scene.table(src.table).height, 0.0,
-                                                  table=src.table)
+                # In a pile, on the objects under it.
+                self.states[i.name] = ObjectState(
+                    i.name, src.x, src.y, scene.resting_z(i.name, i.spec.name, self.heights),
+                    0.0, table=src.table, on=src.on if src.on in self.heights else None)
         self.carried: list[str] = []
 
     # -- state ------------------------------------------------------------------------
@@ -245,13 +246,26 @@ class Kinematic2DSession:
         if st.table is None or st.tilt_rad > TIPPED_RAD / 2:
             p = 0.0  # lying on its side or on the floor: the gripper cannot close on it
         if self.rng.random() < p:
-            del self.states[name]
+            self._lift(name)
             self.carried.append(name)
             return self._step(ExecutedStep("pick", True, self._seconds("pick"), name,
                                            standing=standing, pose=start))
         return self._step(ExecutedStep("pick", False, self._seconds("pick"), name,
                                        standing=standing, pose=start, reason="grasp_missed",
                                        note=f"the grasp missed (reach {reach:.2f} m)"))
+
+    def _lift(self, name: str) -> None:
+        """``name`` leaves where it lies; what rested on it settles onto what it rested on.
+        A pile's objects are of one kind, so taking one from the middle stands for taking
+        the top one: the arm gets the same object either way."""
+        st = self.states.pop(name)
+        drop = self.heights.get(name, 0.0)
+        above = next((o for o in self.states.values() if o.on == name), None)
+        if above is not None:
+            self.states[above.name] = replace(above, on=st.on)
+        while above is not None:
+            self.states[above.name] = replace(self.states[above.name], z=above.z - drop)
+            above = next((o for o in self.states.values() if o.on == above.name), None)
 
     def place(self, name: str, x: float, y: float, yaw: float, on: str | None = None
               ) -> ExecutedStep:

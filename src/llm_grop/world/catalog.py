@@ -26,6 +26,8 @@ from llm_grop.errors import CatalogError, UnknownObject
 #: Environment variable holding extra catalog files, separated by ``os.pathsep``.
 CATALOG_ENV = "LLM_GROP_CATALOG"
 
+#: The most objects of one kind a catalog may let wait in one pile.
+MAX_STACK = 12
 _ARTICLES = re.compile(r"^(?:the|a|an|one|some|another)\s+")
 
 
@@ -35,7 +37,8 @@ class ObjectSpec:
 
     ``size`` is the footprint ``(sx, sy)`` in metres in the object's own frame;
     ``height`` is in metres. ``shape`` is ``"circle"`` (then ``sx == sy`` is the
-    diameter) or ``"box"``.
+    diameter) or ``"box"``. ``stack`` is how many of this kind may wait in one pile on a
+    supply table before an episode (plates and bowls nest; 1: each waits on its own).
     """
 
     name: str
@@ -43,6 +46,7 @@ class ObjectSpec:
     size: tuple[float, float]
     height: float
     synonyms: tuple[str, ...] = ()
+    stack: int = 1
 
     @property
     def area(self) -> float:
@@ -59,6 +63,7 @@ class _ObjectModel(BaseModel):
     size: tuple[float, float]
     height: float = Field(gt=0, allow_inf_nan=False)
     synonyms: list[str] = []
+    stack: int = Field(1, ge=1, le=MAX_STACK)
 
     @field_validator("size")
     @classmethod
@@ -193,7 +198,7 @@ def _parse(text: str, where: str) -> list[ObjectSpec]:
             raise CatalogError(f"{where}: objects[{i}] ({obj.name!r}).size: "
                                "a circle needs size [d, d]")
         specs.append(ObjectSpec(name, obj.shape, (float(obj.size[0]), float(obj.size[1])),
-                                float(obj.height), tuple(obj.synonyms)))
+                                float(obj.height), tuple(obj.synonyms), obj.stack))
     _check_unique(model.objects, specs, where)
     return specs
 

@@ -10,6 +10,7 @@ at planning time (see :meth:`Scene.static_obstacles`).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from llm_grop.errors import BadInput
@@ -69,7 +70,8 @@ class Chair:
 
 @dataclass(frozen=True)
 class ObjectSource:
-    """Where one requested object starts: on table ``table`` at room-frame ``(x, y)`` metres.
+    """Where one requested object starts: on table ``table`` at room-frame ``(x, y)`` metres,
+    on the top or, in a pile, on the object named ``on`` (which starts at the same spot).
 
     ``object`` is an item name ("dinner fork 2") or a catalog kind ("dinner fork").
     """
@@ -78,6 +80,7 @@ class ObjectSource:
     table: str
     x: float
     y: float
+    on: str | None = None
 
 
 @dataclass(frozen=True)
@@ -166,6 +169,21 @@ class Scene:
             if s.object == kind:
                 return s
         return None
+
+    def resting_z(self, item: str, kind: str, heights: Mapping[str, float]) -> float:
+        """Height, metres above the floor, of the bottom of item ``item`` (of kind ``kind``)
+        where it starts: its table's top plus the heights of the objects under it in its
+        pile (``heights``: item name -> height in metres). ``KeyError`` when it has no
+        source."""
+        source = self.source_for(item, kind)
+        if source is None:
+            raise KeyError(item)
+        z, seen = self.table(source.table).height, {item}
+        while source is not None and source.on is not None and source.on not in seen:
+            seen.add(source.on)
+            z += heights.get(source.on, 0.0)
+            source = self.source_for(source.on, "")
+        return z
 
     def with_chairs(self, chairs: tuple[Chair, ...]) -> Scene:
         """This scene with ``chairs`` instead of its own."""

@@ -175,14 +175,25 @@ def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.
     for c in scene.chairs:
         _chair(world, c, (centre.x, centre.y), chair_mass_kg, chair_friction)
     mats = _placemats(world, scene)
+    heights = {s.item.name: s.item.height for s in starts}
     for s in starts:
-        add_body(spec, world, s.item, (s.x, s.y, s.z), s.yaw, (*kind_rgb(s.item.kind), 1.0))
+        z = s.z + _pile_lift_m(scene, s.item, heights)
+        add_body(spec, world, s.item, (s.x, s.y, z), s.yaw, (*kind_rgb(s.item.kind), 1.0))
         spec.add_equality(type=mujoco.mjtEq.mjEQ_WELD, name=f"grip:{s.item.name}",
                           name1="hand", name2=s.item.name, objtype=mujoco.mjtObj.mjOBJ_BODY,
                           active=False, solref=[0.004, 1.0])
     add_cameras(world, scene, mats.get(0))
     model = spec.compile()
     return _index(model, scene, {s.item.name: s.item for s in starts})
+
+
+def _pile_lift_m(scene: Scene, item: Tableware, heights: dict[str, float]) -> float:
+    """How far, metres, ``item`` starts above its table's top: the heights of the objects
+    under it when the scene's sources start it in a pile (0 otherwise)."""
+    source = scene.source_for(item.name, item.kind)
+    if source is None or source.on is None:
+        return 0.0
+    return scene.resting_z(item.name, item.kind, heights) - scene.table(source.table).height
 
 
 def _box_geom(body: mujoco.MjsBody, name: str, size: Sequence[float], pos: Sequence[float],
