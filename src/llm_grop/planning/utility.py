@@ -106,6 +106,7 @@ class PlanningContext:
         candidates: standing positions around the target table.
         cand_xy: their positions, shape ``(P, 2)``, metres.
         cand_nav_p: navigation success probability of each, shape ``(P,)``.
+        cand_gap_m: distance between each two of them, ``(P, P)``, metres.
         pickups: one per item, in item order.
         dist_m: path length from each candidate to each pickup field's source, ``(P, K)``.
         start_dist_m: path length from the robot's start to each pickup, ``(K,)``.
@@ -124,6 +125,8 @@ class PlanningContext:
         if not self.candidates:
             raise Infeasible(blocked_reason(scene, scene.target, robot))
         self.cand_xy = np.array([[c.pose.x, c.pose.y] for c in self.candidates])
+        self.cand_gap_m = np.hypot(self.cand_xy[:, None, 0] - self.cand_xy[None, :, 0],
+                                   self.cand_xy[:, None, 1] - self.cand_xy[None, :, 1])
         self.cand_nav_p = np.asarray(
             model.navigation(np.array([c.clearance_m for c in self.candidates])), dtype=float)
         grid = build_grid(scene, resolution_m=self.options.grid_resolution_m)
