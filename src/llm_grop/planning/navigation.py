@@ -256,23 +256,26 @@ class _FreeLookup:
 
     def __init__(self, obstacles: Obstacles, cell_m: float = LOOKUP_CELL_M) -> None:
         self._exact = obstacles.free
-        self._cell = cell_m
-        self._cols = max(1, math.ceil(obstacles.width / cell_m))
-        self._rows = max(1, math.ceil(obstacles.depth / cell_m))
-        jj, ii = np.meshgrid(np.arange(self._cols), np.arange(self._rows))
+        self.cell_m = cell_m
+        self.cols = max(1, math.ceil(obstacles.width / cell_m))
+        self.rows = max(1, math.ceil(obstacles.depth / cell_m))
+        jj, ii = np.meshgrid(np.arange(self.cols), np.arange(self.rows))
         centres = (np.stack([jj.ravel(), ii.ravel()], axis=1) + 0.5) * cell_m
-        self._clearance = obstacles.clearance(centres).tolist()
-        self._half_m = cell_m * math.sqrt(0.5) + self._GUARD_M
+        #: Exact clearance at each cell's centre, metres, row by row (a list: read one
+        #: at a time).
+        self.clearance: list[float] = obstacles.clearance(centres).tolist()
+        #: The cell's half diagonal plus the guard, metres.
+        self.half_m = cell_m * math.sqrt(0.5) + self._GUARD_M
 
     def free(self, x: float, y: float, radius_m: float) -> bool:
         """Whether a disc of ``radius_m`` at room-frame ``(x, y)`` touches nothing
         (:meth:`Obstacles.free`'s answer)."""
-        j, i = int(x / self._cell), int(y / self._cell)
-        if 0 <= i < self._rows and 0 <= j < self._cols and x >= 0 and y >= 0:
-            c = self._clearance[i * self._cols + j]
-            if c - self._half_m >= radius_m:
+        j, i = int(x / self.cell_m), int(y / self.cell_m)
+        if 0 <= i < self.rows and 0 <= j < self.cols and x >= 0 and y >= 0:
+            c = self.clearance[i * self.cols + j]
+            if c - self.half_m >= radius_m:
                 return True
-            if c + self._half_m < radius_m:
+            if c + self.half_m < radius_m:
                 return False
         return self._exact(x, y, radius_m)
 
@@ -294,11 +297,24 @@ def _ompl_path(nav: Navigator, start: Point, goal: Point, seed: int, margin_m: f
     bounds.setHigh(1, nav.scene.depth)
     space.setBounds(bounds)
     si = ob.SpaceInformation(space)
-    free, radius = nav.free_lookup().free, nav.radius_m - 1e-9
+    lookup = nav.free_lookup()
+    free, radius = lookup.free, nav.radius_m - 1e-9
     (sx, sy), (gx, gy) = start, goal
+    cells, cols, rows, cell, half = (lookup.clearance, lookup.cols, lookup.rows,
+                                     lookup.cell_m, lookup.half_m)
+    widest = radius + margin_m
 
     def valid(s: ob.State) -> bool:
         x, y = s[0], s[1]
+        # The lookup's decisive cases first: the required clearance lies between the
+        # radius and the radius plus the margin, whatever the taper.
+        j, i = int(x / cell), int(y / cell)
+        if 0 <= i < rows and 0 <= j < cols and x >= 0 and y >= 0:
+            c = cells[i * cols + j]
+            if c - half >= widest:
+                return True
+            if c + half < radius:
+                return False
         taper = 0.5 * min(math.hypot(x - sx, y - sy), math.hypot(x - gx, y - gy))
         return free(x, y, radius + min(margin_m, taper))
 

@@ -38,7 +38,6 @@ from llm_grop.planning.standing import (
     blocked_reason,
     candidate_standing_poses,
     pickup_pose,
-    reach,
 )
 from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import Item, Placement
@@ -182,7 +181,10 @@ class PlanningContext:
 
     def place_manipulation(self, placements: Sequence[Placement]) -> Floats:
         """``(n, P)`` probability that placing object ``j`` from stand ``s`` succeeds."""
-        r = reach(self.candidates, self.targets_room(placements))
+        pts = self.targets_room(placements).reshape(-1, 2)
+        # reach(self.candidates, pts), from the positions already at hand.
+        r = np.hypot(self.cand_xy[:, None, 0] - pts[None, :, 0],
+                     self.cand_xy[:, None, 1] - pts[None, :, 1])
         return np.asarray(placing(self.model, r.T, self.scene.robot), dtype=float)
 
     def place_feasibility(self, placements: Sequence[Placement]) -> Floats:
