@@ -22,6 +22,8 @@ Run: .venv/bin/python benchmarks/family_planning.py [--seeds 20] [--quick]
 from __future__ import annotations
 
 import argparse
+import itertools
+import statistics
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -37,8 +39,13 @@ from llm_grop.files.scene_file import load_scene, set_target_top
 from llm_grop.methods.base import EpisodeInput
 from llm_grop.methods.episode import plan_episode
 from llm_grop.methods.registry import get_method
+from llm_grop.planning.feasibility import feasibility_profile
+from llm_grop.planning.grop import Candidate, evaluate
+from llm_grop.planning.sequencing import supports_before
+from llm_grop.planning.trips import cut_order, plan_trips, stand_distances
+from llm_grop.planning.utility import PlanningContext
 from llm_grop.simulation.scenario import prepare_episode
-from llm_grop.world.arrangement import Item
+from llm_grop.world.arrangement import Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.table import Table
 
@@ -84,10 +91,17 @@ def diners(n: int) -> tuple[Item, ...]:
 
 
 def planning_s(method: str, items: tuple[Item, ...], request: str, seed: int,
-               options: ArrangeOptions) -> float:
+               options: ArrangeOptions, capacity: int = 1) -> float:
     """Planning time, seconds, of ``method`` for ``items`` on the 1.8 x 0.9 m table of the
     banquet room with 1 chair, set up as ``llm_grop.api.run`` sets it up."""
+    return planned(method, items, request, seed, options, capacity)[0].planning_time_s
+
+
+def planned(method: str, items: tuple[Item, ...], request: str, seed: int,
+            options: ArrangeOptions, capacity: int = 1):  # type: ignore[no-untyped-def]
+    """:func:`planning_s`'s planned episode and its items (a robot of ``capacity``)."""
     base = set_target_top(load_scene(BANQUET), TABLE, keep_chairs=False)
+    base = replace(base, robot=replace(base.robot, capacity=capacity))
     items = seat_items(items, base.target_top)
     top = seat_table(base.target_top, items)
     if top.diners and not base.diners:
@@ -96,7 +110,34 @@ def planning_s(method: str, items: tuple[Item, ...], request: str, seed: int,
     chosen = get_method(method)
     llm = replay_llm() if chosen.arrangement.uses_llm else None
     inp = EpisodeInput(request, items, top, seed, CATALOG, llm, options)
-    return plan_episode(chosen, inp, scene).planning_time_s
+    return plan_episode(chosen, inp, scene), items
+
+
+def trip_gap(n: int, capacity: int, seed: int) -> tuple[float, float, float]:
+    """Driving distance, metres, of the trips GROP plans for ``n`` objects (the first
+    ``n`` of :data:`OBJECTS`, random arrangement) with a robot of ``capacity``; of the
+    capacity-1 order's best cut into trips (what GROP planned up to version 0.17); and
+    the least over every order of the objects and every cut of it into trips (the same
+    standing positions, the same trip model: a trip's pickups, then its places)."""
+    episode, items = planned("grop", objects(n), f"{n} objects", seed, ArrangeOptions(),
+                             capacity)
+    ctx = PlanningContext(episode.scene, items, feasibility_profile(episode.feasibility))
+    cand = evaluate(ctx, Configuration(episode.plan.configuration),
+                    episode.plan.configuration_index)
+    assert isinstance(cand, Candidate)
+    between = stand_distances(ctx, cand.stand)
+    before = supports_before([p.name for p in cand.placements],
+                             {p.name: p.on for p in cand.placements})
+    trips, _ = plan_trips(ctx, cand.order, cand.stand, capacity, before)
+    ours = cut_order(ctx, [j for t in trips for j in t], cand.stand, capacity, between)[1]
+    cut = cut_order(ctx, cand.order, cand.stand, capacity, between)[1]
+    best = min(ours, cut)
+    for perm in itertools.permutations(range(n)):
+        pos = {j: k for k, j in enumerate(perm)}
+        if any(pos[a] > pos[b] for a, b in before):
+            continue
+        best = min(best, cut_order(ctx, perm, cand.stand, capacity, between)[1])
+    return ours, cut, best
 
 
 def report(label: str, seeds: int, one: Callable[[int], float]) -> None:
@@ -122,7 +163,11 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--objects", default="10,20,40")
     ap.add_argument("--diners", default="2,4,6,8")
-    args = parse_args(ap, {"seeds": 1, "objects": "10", "diners": "2"})
+    ap.add_argument("--trip-objects", default="4,5,6,7",
+                    help="object counts of the trip grouping's optimality gap")
+    ap.add_argument("--trip-seeds", type=int, default=10)
+    args = parse_args(ap, {"seeds": 1, "objects": "10", "diners": "2",
+                           "trip_objects": "4", "trip_seeds": 1})
     llm = replay_llm()
     report("Task 8 (5 objects), LLM-GROP, 0.9 x 0.6 m table", args.seeds,
            lambda seed: plan(task=8, method="llm-grop", seed=seed, chairs=1,
@@ -137,6 +182,21 @@ def main() -> None:
         report(f"{n} diners x 4 objects, LLM-GROP (preferences), 1.8 x 0.9 m table",
                args.seeds,
                lambda seed, n=n, r=request: planning_s("llm-grop", diners(n), r, seed, prefs))
+    print("Trip grouping (capacity > 1) against every order and every cut into trips "
+          "(driving distance; same standing positions):")
+    for capacity in (2, 3):
+        for n in (int(k) for k in args.trip_objects.split(",") if k):
+            gaps, cut_gaps, optimal = [], [], 0
+            for seed in range(args.trip_seeds):
+                ours, cut, best = trip_gap(n, capacity, seed)
+                gaps.append(ours / best - 1)
+                cut_gaps.append(cut / best - 1)
+                optimal += ours <= best + 1e-9
+            print(f"  capacity {capacity}, {n} objects: gap mean "
+                  f"{100 * statistics.fmean(gaps):.1f}%, max {100 * max(gaps):.1f}%, optimal "
+                  f"in {optimal} of {args.trip_seeds} seeds (the capacity-1 order cut into "
+                  f"trips: mean {100 * statistics.fmean(cut_gaps):.1f}%, "
+                  f"max {100 * max(cut_gaps):.1f}%)", flush=True)
 
 
 if __name__ == "__main__":

@@ -219,13 +219,16 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
                configurations: int) -> Plan:
     """The chosen candidate as steps, with an OMPL path for every navigation leg.
 
-    With ``capacity > 1`` the order is cut into trips (:mod:`llm_grop.planning.trips`):
-    all of a trip's pickups, then its placements; the order and standing positions are
-    those of capacity 1. Both the trips and one object per trip get paths, and the plan
-    of shorter expected duration is kept, so more capacity is never slower in the plan.
+    With ``capacity > 1`` the objects are grouped into trips
+    (:mod:`llm_grop.planning.trips`): all of a trip's pickups, then its placements; the
+    standing positions are those of capacity 1, the order is searched anew. Both the
+    trips and one object per trip get paths, and the plan of shorter expected duration
+    is kept, so more capacity is never slower in the plan.
     """
     robot = ctx.scene.robot
-    trips, _ = plan_trips(ctx, cand.order, cand.stand, robot.capacity)
+    before = supports_before([p.name for p in cand.placements],
+                             {p.name: p.on for p in cand.placements})
+    trips, _ = plan_trips(ctx, cand.order, cand.stand, robot.capacity, before)
     steps = _steps(ctx, cand, trips, navigator, seed)
     # The candidate's cost assumed one object per trip; credit what the trips save.
     saved_s = 0.0
@@ -233,8 +236,8 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
         singles = _steps(ctx, cand, tuple((j,) for j in cand.order), navigator, seed)
         saved_s = _duration(singles) - _duration(steps)
         if saved_s <= 0:
-            steps, saved_s = singles, 0.0
-    names = tuple(cand.placements[j].name for j in cand.order)
+            steps, saved_s, trips = singles, 0.0, tuple((j,) for j in cand.order)
+    names = tuple(cand.placements[j].name for trip in trips for j in trip)
     return Plan(order=names, steps=steps, configuration=cand.placements,
                 expected_duration_s=expected_duration_s(
                     steps, action_times(ctx.model, robot).failed_attempt_s),
