@@ -45,7 +45,7 @@ def main() -> None:
         times.append(r.planning_time_s * 1000)
     med, p95 = median_p95(times)
     print(f"Task 8, LLM-GROP, M=25: median {med:.1f} ms, p95 {p95:.1f} ms "
-          f"({args.seeds} seeds; target <= 200 ms)")
+          f"({args.seeds} seeds; target <= 50 ms)")
     scene = _big_table_scene()
     for label, request in (("10 objects", TEN), ("20 objects", TWENTY)):
         times = []

@@ -183,3 +183,31 @@ def test_pickup_stances_the_robot_cannot_reach_are_not_used() -> None:
     for step in result.plan.steps:
         if step.action == "pick":
             assert step.standing is not None
+
+
+def test_trips_are_the_best_over_every_order_and_cut(catalog: Catalog) -> None:
+    import itertools
+    from dataclasses import replace
+
+    from llm_grop.planning.trips import cut_order, plan_trips, stand_distances
+    from llm_grop.world.robot import Robot
+
+    names = ["dinner plate", "dinner fork", "dinner knife", "mug", "bread"]
+    cfg = config(placement("dinner plate", 0.0, 0.0),
+                 placement("dinner fork", -0.2, 0.0, "box", (0.025, 0.2)),
+                 placement("dinner knife", 0.2, 0.0, "box", (0.02, 0.23)),
+                 placement("mug", 0.3, 0.15, size=(0.09, 0.09)),
+                 placement("bread", -0.3, 0.15, size=(0.08, 0.08)))
+    scene = replace(two_table_room(), robot=Robot(capacity=2))
+    ctx = _ctx(catalog, names, scene=scene)
+    cand = choose(ctx, [cfg])
+    before = [(0, 3)]  # as if the mug rested on the plate
+    trips, saved = plan_trips(ctx, cand.order, cand.stand, 2, before)
+    between = stand_distances(ctx, cand.stand)
+    order = [j for t in trips for j in t]
+    assert sorted(order) == list(range(5)) and order.index(0) < order.index(3)
+    assert all(1 <= len(t) <= 2 for t in trips) and saved >= 0
+    ours = cut_order(ctx, order, cand.stand, 2, between)[1]
+    best = min(cut_order(ctx, p, cand.stand, 2, between)[1]
+               for p in itertools.permutations(range(5)) if p.index(0) < p.index(3))
+    assert ours == pytest.approx(best)

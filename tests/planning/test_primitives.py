@@ -181,3 +181,26 @@ def test_chairs_all_round_are_reported() -> None:
     scene = two_table_room(chairs=chairs)
     assert candidate_standing_poses(scene, "dining table", scene.robot) == ()
     assert "block every side" in blocked_reason(scene, "dining table", scene.robot)
+
+
+def test_free_lookup_gives_the_exact_answers() -> None:
+    # The clearance grid only decides where it is sure; every answer is Obstacles.free's.
+    scene = two_table_room(chairs=(Chair("chair 1", Box(3.0, 1.2, 0.45, 0.45, 0.4)),))
+    nav = Navigator(scene, 0.3)
+    lookup = nav.free_lookup()
+    rng = np.random.default_rng(1)
+    for x, y in rng.uniform([0, 0], [6, 4], size=(3000, 2)):
+        for r in (0.3, 0.33, 0.36):
+            assert lookup.free(float(x), float(y), r) == nav.obstacles.free(float(x), float(y), r)
+
+
+def test_grid_of_a_room_is_kept_but_chairs_are_each_episodes() -> None:
+    chair = Chair("chair 1", Box(3.0, 1.2, 0.45, 0.45, 0.4))
+    with_chair = build_grid(two_table_room(chairs=(chair,)))
+    without = build_grid(two_table_room())
+    direct = Obstacles(two_table_room(chairs=(chair,))).clearance(
+        (np.stack(np.meshgrid(np.arange(with_chair.shape[1]), np.arange(with_chair.shape[0])),
+                  axis=-1).reshape(-1, 2) + 0.5) * with_chair.resolution_m)
+    assert np.array_equal(with_chair.clearance_m.ravel(), direct)
+    assert (without.clearance_m >= with_chair.clearance_m).all()
+    assert (without.clearance_m > with_chair.clearance_m).any()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from llm_grop.errors import Infeasible
-from llm_grop.planning.sequencing import best_order, supports_before
+from llm_grop.planning.sequencing import best_order, lower_bound, refine, supports_before
 
 
 def _brute(first, edge, end, before):  # type: ignore[no-untyped-def]
@@ -68,3 +68,32 @@ def test_supports_before_and_cycles() -> None:
     with pytest.raises(Infeasible, match="cycle"):
         best_order(np.zeros(2), np.zeros((2, 2)), np.zeros(2), [(0, 1), (1, 0)],
                    names=["a", "b"])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_local_search_states_a_true_bound(seed: int) -> None:
+    # Beyond the exact limit the order is local search's; its bound never exceeds the
+    # optimum, and refining keeps precedence and never costs more.
+    rng = np.random.default_rng(seed)
+    n = 9
+    pts, pick = rng.uniform(0, 5, (n, 2)), rng.uniform(0, 5, (n, 2))
+    edge = np.hypot(*(pts[:, None] - pick[None]).transpose(2, 0, 1)) - rng.uniform(0, 3, (n, 1))
+    first, end = np.hypot(*pick.T), np.zeros(n)
+    before = [(0, 4), (4, 7)]
+    exact = best_order(first, edge, end, before)
+    local = best_order(first, edge, end, before, exact_limit=0, node_budget=0)
+    better = refine(first, edge, end, local, before)
+    for got in (local, better):
+        pos = {j: i for i, j in enumerate(got.order)}
+        assert sorted(got.order) == list(range(n)) and pos[0] < pos[4] < pos[7]
+        assert got.bound <= exact.cost + 1e-9 <= got.cost + 2e-9
+        assert got.gap == pytest.approx(0.0 if got.optimal else got.cost - got.bound)
+    assert better.cost <= local.cost + 1e-12
+
+
+def test_lower_bound_is_the_assignment_relaxation() -> None:
+    # Two far clusters: the relaxation may not close the tour, but never exceeds it.
+    first, end = np.array([0.0, 10.0, 10.0]), np.zeros(3)
+    edge = np.array([[np.inf, 10.0, 10.0], [10.0, np.inf, 1.0], [10.0, 1.0, np.inf]])
+    assert lower_bound(first, edge, end) <= best_order(first, edge, end).cost
+    assert lower_bound(np.zeros(1), np.full((1, 1), np.inf), np.zeros(1)) == 0.0

@@ -28,7 +28,7 @@ from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import leg_duration_s
 from llm_grop.planning.feasibility import action_times, placing
 from llm_grop.planning.navigation import Navigator
-from llm_grop.planning.sequencing import best_order, supports_before
+from llm_grop.planning.sequencing import best_order, refine, supports_before
 from llm_grop.planning.trips import plan_trips
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement
@@ -43,15 +43,16 @@ StandingPolicy = Literal["utility", "uniform"]
 #: The uniform policy draws among positions whose place succeeds at least this fraction
 #: as often as from the best position.
 UNIFORM_REACH = 0.5
-#: Up to this many objects the order is found exactly for every configuration.
+#: Up to this many objects the order is found exactly for every configuration; beyond
+#: it, by local search, with a stated bound on its gap to the optimum
+#: (:func:`~llm_grop.planning.sequencing.best_order`).
 EXACT_LIMIT = 12
 #: Success probabilities below this count as this in a plan's expected retries (a plan
 #: never chooses a step it believes impossible).
 MIN_RETRY_P = 0.05
-#: Beyond it, every configuration gets the local-search order, and the ``REFINE`` best
-#: get a branch-and-bound search of up to ``NODE_BUDGET`` nodes.
-REFINE = 2
-NODE_BUDGET = 10_000
+#: Beyond :data:`EXACT_LIMIT` objects, the orders of this many configurations of best
+#: score are refined (:func:`~llm_grop.planning.sequencing.refine`) before one is chosen.
+REFINE = 3
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,7 @@ class Candidate:
     cost_s: float
     place_p: tuple[float, ...]
     order_optimal: bool = True
+    order_gap_s: float = 0.0
     fidelity: Fidelity = Fidelity()
     score: float = 0.0
     considered: tuple[Considered, ...] = ()
@@ -81,13 +83,16 @@ def _in_item_order(ctx: PlanningContext, config: Configuration) -> tuple[Placeme
 
 def evaluate(ctx: PlanningContext, config: Configuration, index: int,
              policy: StandingPolicy = "utility", rng: np.random.Generator | None = None,
-             node_budget: int = NODE_BUDGET) -> Candidate | str:
+             node_budget: int = 0, refined: bool = False) -> Candidate | str:
     """The best plan for ``config``, or the reason none exists.
 
     ``policy="uniform"`` draws each standing position uniformly (with ``rng``) from those
     within good reach (:data:`UNIFORM_REACH`) instead of maximising utility; the order is
     still the cheapest.
-    ``node_budget`` bounds the order search beyond :data:`EXACT_LIMIT` objects.
+    Beyond :data:`EXACT_LIMIT` objects the order is local search's, followed by a
+    branch-and-bound search of up to ``node_budget`` nodes and, when ``refined``, by exact
+    re-ordering of windows of it; ``order_gap_s`` states how many
+    seconds of utility it may be from the best order's (0 when proven optimal).
     """
     placements = _in_item_order(ctx, config)
     feas = ctx.place_feasibility(placements)
@@ -124,6 +129,8 @@ def evaluate(ctx: PlanningContext, config: Configuration, index: int,
     before = supports_before(names, {p.name: p.on for p in placements})
     ordering = best_order(first, edge, end, before, names=names, exact_limit=EXACT_LIMIT,
                           node_budget=node_budget)
+    if refined and len(names) > EXACT_LIMIT:
+        ordering = refine(first, edge, end, ordering, before)
     if not np.isfinite(ordering.cost):
         return "no order of the objects has a collision-free plan"
     order = ordering.order
@@ -131,28 +138,31 @@ def evaluate(ctx: PlanningContext, config: Configuration, index: int,
     for pos, j in enumerate(order):
         row = out[j, field[order[pos + 1]]] if pos + 1 < len(order) else score[j]
         ranked_all = np.argsort(-row, kind="stable")
-        ranked = [int(s) for s in ranked_all[np.isfinite(row[ranked_all])]]
-        stand[j] = ranked[0]
+        ranked = ranked_all[np.isfinite(row[ranked_all])]
+        stand[j] = int(ranked[0])
         alts[j] = tuple(_spread(ctx, ranked[1:], ranked[0], ctx.options.alternatives))
     place_p = [float(feas[j, stand[j]]) for j in range(len(order))]
     utility = -ordering.cost - ctx.fixed_costs_s()
     feasibility = float(np.prod(place_p))
     cost_s = w * sum(place_p) - utility
     return Candidate(index, placements, order, tuple(stand), tuple(alts), float(utility),
-                     feasibility, float(cost_s), tuple(place_p), ordering.optimal)
+                     feasibility, float(cost_s), tuple(place_p), ordering.optimal,
+                     ordering.gap)
 
 
 def _spread(ctx: PlanningContext, ranked: Sequence[int], chosen: int, k: int,
             min_gap_m: float = 0.3) -> list[int]:
     """Up to ``k`` fallbacks from ``ranked``, each ``min_gap_m`` from the others and the
     chosen one, so a chair that blocks one does not block them all."""
-    picked = [chosen]
-    for s in ranked:
-        if len(picked) > k:
-            break
-        if all(np.hypot(*(ctx.cand_xy[s] - ctx.cand_xy[t])) >= min_gap_m for t in picked):
-            picked.append(s)
-    return picked[1:]
+    order = np.asarray(ranked, dtype=np.int64)
+    ok = ctx.cand_gap_m[chosen, order] >= min_gap_m
+    picked: list[int] = []
+    while len(picked) < k and ok.any():
+        first = int(np.argmax(ok))
+        s = int(order[first])
+        picked.append(s)
+        ok &= ctx.cand_gap_m[s, order] >= min_gap_m
+    return picked
 
 
 def choose(ctx: PlanningContext, configs: Sequence[Configuration],
@@ -169,12 +179,11 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
         raise ValueError(f"{len(fidelity)} fidelity measures for {len(configs)} configurations")
     per_m = 100.0 * ctx.options.fidelity_w_s_per_cm
     fid = list(fidelity) or [Fidelity()] * len(configs)
-    large = len(ctx.items) > EXACT_LIMIT
     reasons: list[str] = []
     found: list[Candidate] = []
     considered: list[Considered] = []
     for i, config in enumerate(configs):
-        cand = evaluate(ctx, config, i, policy, rng, node_budget=0 if large else NODE_BUDGET)
+        cand = evaluate(ctx, config, i, policy, rng)
         if isinstance(cand, str):
             log.debug("configuration %d: no plan: %s", i + 1, cand)
             reasons.append(cand)
@@ -192,9 +201,9 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
     if not found:
         raise Infeasible(f"no plan for any of {len(configs)} configuration(s): "
                          f"{max(set(reasons), key=reasons.count)}")
-    if large and policy == "utility":
-        top = sorted(found, key=lambda c: -c.score)[:REFINE]
-        refined = [evaluate(ctx, configs[c.index], c.index, policy) for c in top]
+    if len(ctx.items) > EXACT_LIMIT and policy == "utility":
+        top = sorted(found, key=lambda c: (-c.score, c.index))[:REFINE]
+        refined = [evaluate(ctx, configs[c.index], c.index, policy, refined=True) for c in top]
         better = [replace(c, fidelity=fid[c.index],
                           score=c.utility - per_m * fid[c.index].infidelity_m)
                   for c in refined if not isinstance(c, str)]
@@ -210,13 +219,16 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
                configurations: int) -> Plan:
     """The chosen candidate as steps, with an OMPL path for every navigation leg.
 
-    With ``capacity > 1`` the order is cut into trips (:mod:`llm_grop.planning.trips`):
-    all of a trip's pickups, then its placements; the order and standing positions are
-    those of capacity 1. Both the trips and one object per trip get paths, and the plan
-    of shorter expected duration is kept, so more capacity is never slower in the plan.
+    With ``capacity > 1`` the objects are grouped into trips
+    (:mod:`llm_grop.planning.trips`): all of a trip's pickups, then its placements; the
+    standing positions are those of capacity 1, the order is searched anew. Both the
+    trips and one object per trip get paths, and the plan of shorter expected duration
+    is kept, so more capacity is never slower in the plan.
     """
     robot = ctx.scene.robot
-    trips, _ = plan_trips(ctx, cand.order, cand.stand, robot.capacity)
+    before = supports_before([p.name for p in cand.placements],
+                             {p.name: p.on for p in cand.placements})
+    trips, _ = plan_trips(ctx, cand.order, cand.stand, robot.capacity, before)
     steps = _steps(ctx, cand, trips, navigator, seed)
     # The candidate's cost assumed one object per trip; credit what the trips save.
     saved_s = 0.0
@@ -224,8 +236,8 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
         singles = _steps(ctx, cand, tuple((j,) for j in cand.order), navigator, seed)
         saved_s = _duration(singles) - _duration(steps)
         if saved_s <= 0:
-            steps, saved_s = singles, 0.0
-    names = tuple(cand.placements[j].name for j in cand.order)
+            steps, saved_s, trips = singles, 0.0, tuple((j,) for j in cand.order)
+    names = tuple(cand.placements[j].name for trip in trips for j in trip)
     return Plan(order=names, steps=steps, configuration=cand.placements,
                 expected_duration_s=expected_duration_s(
                     steps, action_times(ctx.model, robot).failed_attempt_s),

@@ -7,11 +7,14 @@ robot senses them (``include_chairs``). The room's outer walls are its boundary.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from llm_grop.geometry.obstacles import Floats, Obstacles
+from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.scene import Scene
 
 
@@ -43,11 +46,48 @@ class OccupancyGrid:
         return (cells[:, ::-1] + 0.5) * self.resolution_m
 
 def build_grid(scene: Scene, resolution_m: float = 0.05,
-               include_chairs: bool = True) -> OccupancyGrid:
-    """The occupancy grid of ``scene`` with exact clearance at every cell centre."""
-    cols = max(1, int(np.ceil(scene.width / resolution_m)))
+                include_chairs: bool = True) -> OccupancyGrid:
+    """The occupancy grid of ``scene`` with exact clearance at every cell centre.
+
+    The clearance is the least of each obstacle's, so the pre-built map's part (walls and
+    tables, the same in every episode of a room) is computed once per room and kept
+    (:func:`_map_clearance`), and only the chairs' is computed per episode."""
+    room = _Room(scene.width, scene.depth, scene.static_obstacles())
+    centres, clearance = _map_clearance(room, resolution_m)
+    if include_chairs and scene.chairs:
+        chairs = _Room(scene.width, scene.depth, tuple(c.box for c in scene.chairs))
+        clearance = np.minimum(clearance, _obstacles(chairs).clearance(centres))
     rows = max(1, int(np.ceil(scene.depth / resolution_m)))
+    return OccupancyGrid(resolution_m, clearance.reshape(rows, -1))
+
+
+@dataclass(frozen=True)
+class _Room:
+    """A room's size, metres, and some of its obstacles: what :class:`Obstacles` reads
+    of a scene."""
+
+    width: float
+    depth: float
+    shapes: tuple[Box | Disc, ...]
+    chairs: tuple[()] = ()
+
+    def static_obstacles(self) -> tuple[Box | Disc, ...]:
+        return self.shapes
+
+
+def _obstacles(room: _Room) -> Obstacles:
+    return Obstacles(cast(Scene, room), include_chairs=False)
+
+
+@lru_cache(maxsize=16)
+def _map_clearance(room: _Room, resolution_m: float) -> tuple[Floats, Floats]:
+    """The cell centres of ``room``'s grid, ``(N, 2)``, and their clearance from its
+    obstacles, ``(N,)``, metres (read-only: a cache of a pure function)."""
+    cols = max(1, int(np.ceil(room.width / resolution_m)))
+    rows = max(1, int(np.ceil(room.depth / resolution_m)))
     jj, ii = np.meshgrid(np.arange(cols), np.arange(rows))
     centres = (np.stack([jj.ravel(), ii.ravel()], axis=1) + 0.5) * resolution_m
-    clearance = Obstacles(scene, include_chairs).clearance(centres).reshape(rows, cols)
-    return OccupancyGrid(resolution_m, clearance)
+    clearance = _obstacles(room).clearance(centres)
+    centres.flags.writeable = False
+    clearance.flags.writeable = False
+    return centres, clearance

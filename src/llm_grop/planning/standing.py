@@ -10,6 +10,7 @@ touches nothing: walls, tables and sensed chairs.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 
 import numpy as np
 import shapely
@@ -21,13 +22,23 @@ from llm_grop.planning.feasibility import FeasibilityModel
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import StandingPose
 from llm_grop.world.robot import Robot
-from llm_grop.world.scene import ObjectSource, Scene
+from llm_grop.world.scene import ObjectSource, Scene, SceneTable
 
 
-def _loop_points(scene: Scene, table_name: str, robot: Robot, spacing_m: float,
-                 standoffs_m: Sequence[float]) -> tuple[Floats, Floats]:
-    """Points on the loops round the table, ``(N, 2)``, and their headings, ``(N,)`` radians."""
-    table = scene.table(table_name)
+@lru_cache(maxsize=64)
+def _loop_points(table: SceneTable, base_radius_m: float, spacing_m: float,
+                 standoffs_m: tuple[float, ...]) -> tuple[Floats, Floats]:
+    """Points on the loops round the table, ``(N, 2)``, and their headings, ``(N,)`` radians
+    (read-only: the same table gives the same loops in every episode, so they are kept)."""
+    xy, heading = _loops(table, base_radius_m, spacing_m, standoffs_m)
+    xy.flags.writeable = False
+    heading.flags.writeable = False
+    return xy, heading
+
+
+def _loops(table: SceneTable, base_radius_m: float, spacing_m: float,
+           standoffs_m: tuple[float, ...]) -> tuple[Floats, Floats]:
+    """:func:`_loop_points`, computed."""
     box = table.box
     # A round top's loops are circles (its buffer), and its nearest point lies towards
     # the centre, so every candidate faces the centre.
@@ -35,7 +46,7 @@ def _loop_points(scene: Scene, table_name: str, robot: Robot, spacing_m: float,
         else Polygon(box.corners())
     pts: list[Floats] = []
     for standoff in standoffs_m:
-        ring = top.buffer(standoff + robot.base_radius_m, quad_segs=8).exterior
+        ring = top.buffer(standoff + base_radius_m, quad_segs=8).exterior
         n = max(8, int(round(ring.length / spacing_m)))
         along = np.arange(n) * ring.length / n
         pts.append(shapely.get_coordinates(shapely.line_interpolate_point(ring, along)))
@@ -60,7 +71,8 @@ def candidate_standing_poses(scene: Scene, table_name: str, robot: Robot, *,
     ``spacing_m`` is the distance between neighbours along a loop and ``standoffs_m`` the
     gaps, metres, between the table's edge and the base's footprint.
     """
-    xy, heading = _loop_points(scene, table_name, robot, spacing_m, standoffs_m)
+    xy, heading = _loop_points(scene.table(table_name), robot.base_radius_m, spacing_m,
+                               tuple(standoffs_m))
     clearance = Obstacles(scene, include_chairs).clearance(xy) - robot.base_radius_m
     keep = np.flatnonzero(clearance >= -1e-9)
     return tuple(StandingPose(Pose2D(float(xy[i, 0]), float(xy[i, 1]), float(heading[i])),

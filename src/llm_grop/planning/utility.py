@@ -38,7 +38,6 @@ from llm_grop.planning.standing import (
     blocked_reason,
     candidate_standing_poses,
     pickup_pose,
-    reach,
 )
 from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import Item, Placement
@@ -106,6 +105,7 @@ class PlanningContext:
         candidates: standing positions around the target table.
         cand_xy: their positions, shape ``(P, 2)``, metres.
         cand_nav_p: navigation success probability of each, shape ``(P,)``.
+        cand_gap_m: distance between each two of them, ``(P, P)``, metres.
         pickups: one per item, in item order.
         dist_m: path length from each candidate to each pickup field's source, ``(P, K)``.
         start_dist_m: path length from the robot's start to each pickup, ``(K,)``.
@@ -124,6 +124,8 @@ class PlanningContext:
         if not self.candidates:
             raise Infeasible(blocked_reason(scene, scene.target, robot))
         self.cand_xy = np.array([[c.pose.x, c.pose.y] for c in self.candidates])
+        self.cand_gap_m = np.hypot(self.cand_xy[:, None, 0] - self.cand_xy[None, :, 0],
+                                   self.cand_xy[:, None, 1] - self.cand_xy[None, :, 1])
         self.cand_nav_p = np.asarray(
             model.navigation(np.array([c.clearance_m for c in self.candidates])), dtype=float)
         grid = build_grid(scene, resolution_m=self.options.grid_resolution_m)
@@ -179,7 +181,10 @@ class PlanningContext:
 
     def place_manipulation(self, placements: Sequence[Placement]) -> Floats:
         """``(n, P)`` probability that placing object ``j`` from stand ``s`` succeeds."""
-        r = reach(self.candidates, self.targets_room(placements))
+        pts = self.targets_room(placements).reshape(-1, 2)
+        # reach(self.candidates, pts), from the positions already at hand.
+        r = np.hypot(self.cand_xy[:, None, 0] - pts[None, :, 0],
+                     self.cand_xy[:, None, 1] - pts[None, :, 1])
         return np.asarray(placing(self.model, r.T, self.scene.robot), dtype=float)
 
     def place_feasibility(self, placements: Sequence[Placement]) -> Floats:
