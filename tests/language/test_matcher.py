@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from llm_grop.errors import BadInput, UnknownObject
-from llm_grop.language.request import parse_request
+from llm_grop.language.request import parse_request, read_request
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.request import MAX_COUNT, MAX_OBJECTS, Request, items_from_names
 
@@ -143,3 +143,25 @@ def test_items_from_names_rejects_unknown_names(catalog: Catalog) -> None:
         items_from_names(["mug", "spork"], catalog, where="task 3")
     with pytest.raises(BadInput, match="no objects"):
         items_from_names([], catalog)
+
+
+@pytest.mark.parametrize("text", [
+    "set the table for six people, each with a dinner plate, a dinner fork, a dinner knife "
+    "and a water cup",
+    "set the table for six: a dinner plate, a dinner fork, a dinner knife and a water cup each",
+    "for 6 guests, a dinner plate, a dinner fork, a dinner knife and a water cup apiece",
+    "six place settings, per person a dinner plate, a dinner fork, a dinner knife and a "
+    "water cup",
+])
+def test_each_diner_is_read_where_several_are_set_for(text: str, catalog: Catalog) -> None:
+    reading = read_request(text, catalog)
+    assert reading.diners == 6 and not reading.unread and not reading.doubts
+    assert reading.reading is not None
+    assert [(o.name, o.count) for o in reading.reading.objects] == [
+        ("dinner plate", 1), ("dinner fork", 1), ("dinner knife", 1), ("water cup", 1)]
+
+
+def test_each_is_left_unread_for_one_diner(catalog: Catalog) -> None:
+    # With one diner "each" says something the matcher cannot read ("a fork each side"?).
+    reading = read_request("a dinner plate and a dinner fork each", catalog)
+    assert [u.text for u in reading.unread] == ["each"] and reading.reading is None

@@ -166,6 +166,9 @@ class MatchReader:
         self.contents = False  # anything else is read as itself: "without", "each"
         n_vague = longest_at(words, i, self.vocab.vague, self.vocab.longest)
         n_filler = longest_at(words, i, self.vocab.fillers, self.vocab.longest)
+        if self.diners > 1:
+            n_filler = max(n_filler, longest_at(words, i, self.vocab.per_diner,
+                                                self.vocab.longest))
         n = max(n_count, n_vague, n_filler)
         if n == 0 and is_number(word):
             self._flush_unknown()

@@ -178,7 +178,8 @@ class RequestWords:
     """The words of ``request_words.yaml``, phrases as word tuples.
 
     ``counts`` holds every phrase that counts the next object (number words included);
-    ``articles`` those that count 1 but may dangle harmlessly.
+    ``articles`` those that count 1 but may dangle harmlessly; ``per_diner`` those that
+    say "for every diner", fillers when a request sets the table for several.
     """
 
     numbers: Mapping[str, int]
@@ -186,6 +187,7 @@ class RequestWords:
     articles: frozenset[tuple[str, ...]]
     vague: frozenset[tuple[str, ...]]
     fillers: frozenset[tuple[str, ...]]
+    per_diner: frozenset[tuple[str, ...]]
     separator_words: frozenset[tuple[str, ...]]
     separator_chars: frozenset[str]
     longest: int
@@ -200,10 +202,11 @@ def request_words() -> RequestWords:
     counts.update({_words(k): int(v) for k, v in data["counts"].items()})
     fillers = {_words(p) for p in data["fillers"]} | {_words(w) for w in data["words"]}
     separators = frozenset(_words(w) for w in data["separator_words"])
-    every: Iterable[tuple[str, ...]] = [*counts, *fillers, *separators]
+    per_diner = frozenset(_words(p) for p in data["per_diner"])
+    every: Iterable[tuple[str, ...]] = [*counts, *fillers, *separators, *per_diner]
     return RequestWords(numbers, counts, frozenset(_words(a) for a in data["articles"]),
                         frozenset(_words(v) for v in data["vague"]), frozenset(fillers),
-                        separators, frozenset(str(data["separator_chars"])),
+                        per_diner, separators, frozenset(str(data["separator_chars"])),
                         max(len(p) for p in every))
 
 
