@@ -27,6 +27,8 @@ from llm_grop.assembly import (
     planner_options,
     resolve_feasibility,
     sampling,
+    seat_diners,
+    seat_scene_diners,
     settle,
 )
 from llm_grop.errors import BadInput
@@ -166,7 +168,7 @@ def arrange(request: str | None = None, settings: RunSettings | None = None, *,
     s = job.settings
     catalog = catalog or Catalog.load(s.catalog_files)
     options = arrange_options(s, job.bases.arrange)
-    top = job.table or Table()
+    top = seat_diners(job.table or Table(), s)
     log = job.log()
     reading = _understand(request, s, catalog, job.tasks, log, on_event, top)
     items = seat_items(reading.items, top)
@@ -260,6 +262,7 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
         table = arrangement.table
     if table is not None:
         base = set_target_top(base, table, keep_chairs=chairs is None)
+    base = seat_scene_diners(base, s)
     for k, source in enumerate(base.sources):
         kind = _NUMBERED.sub("", source.object)
         if catalog.lookup(kind) is None:

@@ -234,6 +234,34 @@ def resolve_feasibility(s: RunSettings, simulator: Simulator | None = None) -> R
     return s.with_values(feasibility=sim.fitted_profile())
 
 
+def seat_diners(top: Table, s: RunSettings, where: str = "the table") -> Table:
+    """``top`` with the record's ``diners`` (``--diners``) seated round it: evenly along a
+    rectangle's long sides or round a circle
+    (:func:`~llm_grop.geometry.places.default_seats`), so that a request for one setting
+    is set once for each; ``top`` itself without ``diners`` or when it already seats that
+    many. Apply it after the record's ``table``.
+
+    Raises :class:`~llm_grop.errors.BadInput` (``diners``) when ``top`` (at ``where``)
+    seats another number.
+    """
+    from llm_grop.errors import BadInput
+    from llm_grop.geometry.places import default_seats
+
+    if s.diners is None or s.diners == len(top.diners):
+        return top
+    if top.diners:
+        raise BadInput(f"{s.diners} diners, but {where} seats {len(top.diners)}; give "
+                       f"{len(top.diners)} or leave it out", param="diners")
+    return top.with_diners(default_seats(top, s.diners))
+
+
+def seat_scene_diners(scene: Scene, s: RunSettings) -> Scene:
+    """``scene`` with the record's ``diners`` seated at its target table
+    (:func:`seat_diners`)."""
+    top = seat_diners(scene.target_top, s, f"the scene's {scene.target_table.name!r}")
+    return scene if top.diners == scene.diners else replace(scene, diners=top.diners)
+
+
 def check_recordings(s: RunSettings) -> None:
     """:class:`~llm_grop.errors.BadInput` when a recording the record ``s`` asks for
     cannot be written (its extra missing, a path that cannot be written), before any

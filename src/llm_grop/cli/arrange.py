@@ -23,7 +23,7 @@ from llm_grop.cli.settings import ARRANGE_FIELDS, LLM_FIELDS, checked_settings, 
 @click.command(epilog=EPILOG)
 @VERBOSE
 @click.argument("request", required=False)
-@flags("task", "table", "seed", help={"seed": "Seed for every LLM call and the sampler."})
+@flags("task", "table", "diners", "seed", help={"seed": "Seed for every LLM call and the sampler."})
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Write the arrangement JSON here.")
 @click.option("--image", "image_path", type=click.Path(dir_okay=False, path_type=Path),

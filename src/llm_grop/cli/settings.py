@@ -120,6 +120,6 @@ LLM_FIELDS = ("llm", *fields("backend"))
 #: The arrangement's fields, after the LLM's.
 ARRANGE_FIELDS = tuple(f for f in fields("llm") if f != "llm")
 #: Where the run happens and how it is planned and executed.
-ROOM_FIELDS = ("table", *fields("sim"), *fields("plan"))
+ROOM_FIELDS = ("table", "diners", *fields("sim"), *fields("plan"))
 #: The executive's attempt counts.
 ATTEMPT_FIELDS = fields("execution")

@@ -18,7 +18,7 @@ from typing import Any
 
 from llm_grop.api import run
 from llm_grop.arrangement.diners import seat_items
-from llm_grop.assembly import call_log, make_backend, make_simulator
+from llm_grop.assembly import call_log, make_backend, make_simulator, seat_scene_diners
 from llm_grop.contract.models import TrialRow
 from llm_grop.contract.run_json import run_doc
 from llm_grop.contract.serialize import arrangement_doc
@@ -94,9 +94,11 @@ class TrialRunner:
         s = settings.run
         self.catalog = Catalog.load(s.catalog_files)
         self.tasks: dict[int, Task] = load_tasks(s.task_files)
-        self.scene: Scene = load_scene(s.scene)
-        self.top = self.scene.target_top if s.table is None else \
-            set_target_top(self.scene, Table.parse(s.table)).target_top
+        scene = load_scene(s.scene)
+        if s.table is not None:
+            scene = set_target_top(scene, Table.parse(s.table))
+        self.scene: Scene = seat_scene_diners(scene, s)
+        self.top = self.scene.target_top
         self.simulator = make_simulator(s)
         self._backend: LLM | None = None
 

@@ -151,6 +151,11 @@ class RunSettings(BaseModel):
               "number is metres: 0.9x0.6), or round:D, a round top of diameter D such as "
               "round:120cm; each side 0.2 to 10 m [default: arrange 0.9x0.6 m; run and "
               "bench the scene's].", group="room", door=Door(metavar="WxD|round:D"))
+    diners: int | None = setting(
+        None, "Diners to seat at the target table, evenly along a rectangle's long sides or "
+              "round a circle; a request (or task) for one setting is set for each "
+              "[default: as the request or the scene says].", group="room", ge=1, le=12,
+        door=Door(metavar="N"))
 
     # The arrangement (paper §III-A, §III-B)
     m: int = setting(
