@@ -87,7 +87,9 @@ def _ray_processes() -> dict[int, str]:
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
-                cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+                # Another process's arguments need not be UTF-8 (a test of bad bytes).
+                cmd = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(
+                    errors="replace")
             except OSError:
                 continue
             if "ray::" in cmd or "/ray/" in cmd and ("raylet" in cmd or "gcs_server" in cmd

@@ -147,7 +147,8 @@ def small_disk(tmp_path: Path) -> SmallDisk:
     why = unavailable()
     if why is not None:
         pytest.skip(f"no small disk: {why}")
-    with SmallDisk(tmp_path / "data", 1536) as disk:
+    # Room for two runs' files, their pictures and recordings (episode.rrd) included.
+    with SmallDisk(tmp_path / "data", 3072) as disk:
         yield disk
 
 
@@ -171,7 +172,7 @@ def test_a_full_disk_refuses_new_work_with_503_and_accepted_jobs_finish_after(
     _, url = _serve(small_disk, db, log)
     with httpx.Client(base_url=url, timeout=60) as c:
         accepted = []
-        for seed in range(2):  # what the 1.5 MB disk holds with its pictures
+        for seed in range(2):  # what the 3 MB disk holds with their files
             r = c.post("/v1/runs", json={"task": 8, "seed": seed})
             assert r.status_code == 202, r.text
             accepted.append(r.json()["id"])
