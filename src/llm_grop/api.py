@@ -28,6 +28,7 @@ from llm_grop.assembly import (
     resolve_feasibility,
     sampling,
     settle,
+    with_robot_settings,
 )
 from llm_grop.errors import BadInput
 from llm_grop.language import understanding
@@ -260,6 +261,7 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
         table = arrangement.table
     if table is not None:
         base = set_target_top(base, table, keep_chairs=chairs is None)
+    base = with_robot_settings(base, s)
     for k, source in enumerate(base.sources):
         kind = _NUMBERED.sub("", source.object)
         if catalog.lookup(kind) is None:

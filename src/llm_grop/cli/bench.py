@@ -178,7 +178,13 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     model's per worker; with ``recordings`` each trial writes its Rerun recording to
     ``out_dir/recordings``.
     """
-    from llm_grop.assembly import make_backend, make_simulator, resolve_feasibility, resolve_llm
+    from llm_grop.assembly import (
+        make_backend,
+        make_simulator,
+        resolve_feasibility,
+        resolve_llm,
+        with_robot_settings,
+    )
     from llm_grop.experiment.runner import Experiment
     from llm_grop.experiment.trial import TrialSettings
     from llm_grop.files.scene_file import load_scene, set_target_top
@@ -229,6 +235,7 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
     if settings.table is not None:
         scene = set_target_top(scene, Table.parse(settings.table),
                                keep_chairs=settings.chairs is None)
+    scene = with_robot_settings(scene, settings)
     _check_tasks(tasks, known, settings, sim, scene)
     return Experiment(tasks, trials, methods, TrialSettings(
         settings.with_values(rerun=None, mcap=None),

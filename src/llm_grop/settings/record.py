@@ -152,6 +152,11 @@ class RunSettings(BaseModel):
               "round:120cm; each side 0.2 to 10 m [default: arrange 0.9x0.6 m; run and "
               "bench the scene's].", group="room", door=Door(metavar="WxD|round:D"))
 
+    capacity: int | None = setting(
+        None, "Objects the robot carries per trip: 1 in the hand (the paper's); more ride on "
+              "its tray, up to what the simulator's tray holds (4) [default: the scene's "
+              "robot.capacity, 1 in the packaged scene].", group="room", ge=1)
+
     # The arrangement (paper §III-A, §III-B)
     m: int = setting(
         25, "Configurations to sample (M).", group="llm", ge=1,
