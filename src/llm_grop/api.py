@@ -30,6 +30,7 @@ from llm_grop.assembly import (
     seat_diners,
     seat_scene_diners,
     settle,
+    with_robot_settings,
 )
 from llm_grop.errors import BadInput
 from llm_grop.language import understanding
@@ -263,6 +264,7 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
     if table is not None:
         base = set_target_top(base, table, keep_chairs=chairs is None)
     base = seat_scene_diners(base, s)
+    base = with_robot_settings(base, s)
     for k, source in enumerate(base.sources):
         kind = _NUMBERED.sub("", source.object)
         if catalog.lookup(kind) is None:

@@ -210,6 +210,13 @@ def check_backend(s: RunSettings) -> None:
                        value="replay", mentions=("replay",))
 
 
+def with_robot_settings(scene: Scene, s: RunSettings) -> Scene:
+    """``scene`` with the robot as the record ``s`` sets it (its ``capacity``)."""
+    if s.capacity is None or s.capacity == scene.robot.capacity:
+        return scene
+    return replace(scene, robot=replace(scene.robot, capacity=s.capacity))
+
+
 def make_simulator(s: RunSettings) -> Simulator:
     """The simulator the record ``s`` names, with its options."""
     from llm_grop.simulation.registry import create_simulator

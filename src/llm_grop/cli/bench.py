@@ -184,6 +184,7 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
         resolve_feasibility,
         resolve_llm,
         seat_scene_diners,
+        with_robot_settings,
     )
     from llm_grop.experiment.runner import Experiment
     from llm_grop.experiment.trial import TrialSettings
@@ -236,6 +237,7 @@ def prepare_experiment(settings: RunSettings, *, tasks_text: str, trials: int,
         scene = set_target_top(scene, Table.parse(settings.table),
                                keep_chairs=settings.chairs is None)
     scene = seat_scene_diners(scene, settings)  # too many seats for a scene's, before any trial
+    scene = with_robot_settings(scene, settings)
     _check_tasks(tasks, known, settings, sim, scene)
     return Experiment(tasks, trials, methods, TrialSettings(
         settings.with_values(rerun=None, mcap=None),

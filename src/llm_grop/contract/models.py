@@ -197,6 +197,9 @@ class StepDoc(Doc):
     arrival_yaw_error_rad: Num | None = Field(
         None, description="navigate: absolute difference between the base's heading and "
                           "the goal's, radians")
+    tray: Bool | None = Field(
+        None, description="true for a place onto the robot's tray (loading) and a pick from "
+                          "it (unloading); absent otherwise")
 
 
 class StandingDoc(Doc):
@@ -290,6 +293,10 @@ class RunDoc(Doc):
     unplaced_reasons: dict[Name, Reason] | None = Field(
         None, description="why each unplaced object is not in place, from the steps' list")
     steps: list[StepDoc]
+    trips: list[list[Name]] | None = Field(
+        None, description="with robot.capacity above 1: the objects carried on each trip, "
+                          "in the order picked (a trip of several rides on the robot's tray); "
+                          "absent with capacity 1, where each object is its own trip")
     final: ArrangementDoc = Field(description="where the objects really ended up")
     plan: PlanDoc
     planned: ArrangementDoc = Field(description="the arrangement the plan realises")

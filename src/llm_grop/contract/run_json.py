@@ -57,6 +57,8 @@ def step_doc(s: ExecutedStep) -> StepDoc:
         out["arrival_error_m"] = rounded(s.arrival_error_m)
     if s.arrival_yaw_error_rad is not None:
         out["arrival_yaw_error_rad"] = rounded(s.arrival_yaw_error_rad)
+    if s.tray:
+        out["tray"] = True
     return StepDoc(**out)
 
 
@@ -108,7 +110,11 @@ def run_doc(r: RunResult, *, llm_log: bool = True) -> RunDoc:
     """The run JSON's document of ``r``; ``llm_log=False`` leaves the LLM's call log out of
     ``planned`` (its backend, model and call count stay)."""
     ex = r.execution
+    # Only a robot that carries several objects per trip says its trips: the rows of one
+    # object per trip stay as they were.
+    several = {"trips": [list(t) for t in ex.trips]} if r.scene.robot.capacity > 1 else {}
     return RunDoc(
+        **several,
         method=r.method, task=r.task, seed=r.seed, request=r.request,
         success=ex.success,
         execution_time_s=round(ex.execution_time_s, 3),

@@ -20,6 +20,13 @@
   attempts remain and nothing rests on it, re-placed from its own standing position.
 * **Giving up.** The object in the hand is put down away from the table (on the floor),
   and the plan goes on with the next object.
+* **Trips** (:mod:`llm_grop.execution.trips`). Each of the plan's trips picks its objects
+  in turn, then places them in turn. A trip of one carries its object in the hand; a trip
+  of several carries them on the robot's tray: each is loaded after its pick and unloaded
+  before its place (:mod:`llm_grop.execution.tray`). A trip whose objects do not all fit
+  the tray together, or that carries more than the robot's capacity, is cut into
+  consecutive trips that do; their legs are then driven along paths the robot plans
+  itself.
 
 The result is read from the session at the end: ``final`` lists every object on the
 target table as it is, and an object is placed exactly when it is in place there.
@@ -43,6 +50,8 @@ from llm_grop.execution.judge import (
     table_pose,
 )
 from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS, ExecutionPolicy
+from llm_grop.execution.tray import load, unload
+from llm_grop.execution.trips import Carry, Trip, plan_trips, split_trip
 from llm_grop.recording.stream import BodyPose, EpisodeObserver
 from llm_grop.simulation.base import ObservedSession, PathPlanner, Session, Simulator
 from llm_grop.world.arrangement import Item
@@ -108,34 +117,89 @@ class _Executive:
         self.leg: Step | None = None
         self.turn = 0
         self.disturbed: list[str] = []
+        #: The objects of each trip as carried.
+        self.trips: list[tuple[str, ...]] = []
 
     # -- the plan ---------------------------------------------------------------------
     def run(self) -> Execution:
         self.report()
-        steps = self.plan.steps
-        for k, step in enumerate(steps):
-            name = step.object or ""
-            if name in self.given_up:
-                continue
-            if step.action == "navigate":
-                nxt = steps[k + 1] if k + 1 < len(steps) else None
-                if nxt is not None and nxt.action == "place":
-                    self.place_legs[name] = step
-                assert step.goal is not None
-                if not self.go_leg(step, step.path):
-                    self.give_up(name, self._last_reason(name, "blocked"))
-            elif step.action == "pick":
-                why = self.pick(name)
-                if why is not None:
-                    self.give_up(name, why)
-            else:
-                self.place(name)
-            # Disturbed objects are put back between deliveries, with the hand empty.
-            if (step.action == "place" or name in self.given_up) and self.s.held is None:
-                self.replace_disturbed()
+        trips = plan_trips(self.plan.steps)
+        if trips is None:
+            raise ValueError("the plan's steps are not trips: each object's pick, then its "
+                             "place, each after the leg that leads there")
+        for trip in trips:
+            parts = split_trip(trip, self.scene.robot.capacity, self.s.fits_tray) \
+                if len(trip.carries) > 1 else (trip,)
+            for k, part in enumerate(parts):
+                # A trip cut in parts drives its later legs along paths of its own.
+                self.carry(part, planned_paths=len(parts) == 1 or k == 0)
         if self.s.held is None:
             self.replace_disturbed()
         return self.result()
+
+    def _between(self, name: str, placed: bool) -> None:
+        """Put back disturbed objects between deliveries, with the hand empty: after a
+        place, or once ``name`` was given up."""
+        if (placed or name in self.given_up) and self.s.held is None:
+            self.replace_disturbed()
+
+    def carry(self, trip: Trip, *, planned_paths: bool) -> None:
+        """Carry out ``trip``: fetch each object (onto the tray when it carries several),
+        then deliver each; the first leg follows its planned path, the later ones too
+        when ``planned_paths``."""
+        tray = len(trip.carries) > 1
+        self.trips.append(trip.objects)
+        first = True
+        for c in trip.carries:
+            if c.object in self.given_up:
+                continue
+            self.fetch(c, tray, planned_paths or first)
+            first = False
+        for c in trip.carries:
+            if c.object in self.given_up:
+                continue
+            self.deliver(c, planned_paths or first)
+            first = False
+
+    def fetch(self, c: Carry, tray: bool, planned_path: bool) -> None:
+        """Drive to ``c``'s pickup, pick it, and load it onto the tray when ``tray``."""
+        name = c.object
+        if c.pickup_leg is not None:
+            leg = c.pickup_leg
+            if not self.go_leg(leg, leg.path if planned_path else ()):
+                self.give_up(name, self._last_reason(name, "blocked"))
+            self._between(name, False)
+            if name in self.given_up:
+                return
+        why = self.pick(name)
+        if why is not None:
+            self.give_up(name, why)
+        elif tray:
+            why = load(self, name)
+            if why is not None:
+                self.give_up(name, why)
+        self._between(name, False)
+
+    def deliver(self, c: Carry, planned_path: bool) -> None:
+        """Drive to where ``c`` is placed, unload it from the tray if it rides there, and
+        place it."""
+        name = c.object
+        if c.place_leg is not None:
+            leg = c.place_leg
+            self.place_legs[name] = leg
+            if not self.go_leg(leg, leg.path if planned_path else ()):
+                self.give_up(name, self._last_reason(name, "blocked"))
+            self._between(name, False)
+            if name in self.given_up:
+                return
+        if self.s.objects()[name].tray:
+            why = unload(self, name)
+            if why is not None:
+                self.give_up(name, why)
+                self._between(name, False)
+                return
+        self.place(name)
+        self._between(name, True)
 
     def result(self) -> Execution:
         states = self.s.objects()
@@ -150,7 +214,7 @@ class _Executive:
                 reasons.append((name, self.given_up.get(name, why)))
         return Execution(tuple(self.steps), final, tuple(unplaced),
                          round(sum(s.duration_s for s in self.steps), 6), self.s.robot_pose(),
-                         tuple(reasons))
+                         tuple(reasons), tuple(self.trips))
 
     # -- navigation -------------------------------------------------------------------
     def go(self, goals: Sequence[Pose2D], name: str, path: Sequence[Point] = ()

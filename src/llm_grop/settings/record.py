@@ -157,6 +157,11 @@ class RunSettings(BaseModel):
               "[default: as the request or the scene says].", group="room", ge=1, le=12,
         door=Door(metavar="N"))
 
+    capacity: int | None = setting(
+        None, "Objects the robot carries per trip: 1 in the hand (the paper's); more ride on "
+              "its tray, up to what the simulator's tray holds (4) [default: the scene's "
+              "robot.capacity, 1 in the packaged scene].", group="sim", ge=1)
+
     # The arrangement (paper §III-A, §III-B)
     m: int = setting(
         25, "Configurations to sample (M).", group="llm", ge=1,

@@ -83,6 +83,23 @@ class Session(Protocol):
         let go there; where the object then came to rest is read from :meth:`objects`."""
         ...
 
+    def load(self, name: str) -> ExecutedStep:
+        """One attempt to put the held ``name`` down on the robot's tray, in a free slot
+        that fits it (a ``place`` step marked ``tray``). ``ok`` means the hand let go
+        there; where it came to rest is read from :meth:`objects`. Refused (``ok`` false,
+        no ``reason``) when no free slot fits it."""
+        ...
+
+    def unload(self, name: str) -> ExecutedStep:
+        """One attempt to pick ``name`` from the robot's tray (a ``pick`` step marked
+        ``tray``)."""
+        ...
+
+    def fits_tray(self, names: Sequence[str]) -> bool:
+        """Whether ``names`` fit on the robot's tray together, each in a slot of its own,
+        besides what rides on it now."""
+        ...
+
     def release(self, name: str) -> float:
         """Give up ``name`` if the hand holds it: put it down away from the target table (on
         the floor). The simulated seconds it took."""
@@ -121,6 +138,8 @@ class Simulator(ABC):
       options' ``camera``);
     - :meth:`fitted_profile`: the packaged feasibility profile fitted to what it does,
       which the planner believes under ``--feasibility auto``.
+    - :meth:`tray_capacity`: how many objects its robot carries per trip (1: in the
+      hand; more: on its tray); a scene's ``robot.capacity`` above it is bad input.
     - ``streams``: what its sessions report to an episode's observer while an attempt
       runs (:data:`~llm_grop.recording.stream.STREAMS`: ``base``, ``bodies``, ``arm``,
       ``scan``, ``camera``); a simulator that declares any has sessions with
@@ -151,11 +170,25 @@ class Simulator(ABC):
         simulator no profile was fitted to."""
         return "default"
 
+    def tray_capacity(self) -> int:
+        """How many objects the robot carries per trip: 1 (in the hand) unless the
+        simulator gives it a tray."""
+        return 1
+
     def check(self, scene: Scene, items: Sequence[Item] = ()) -> None:
         """:class:`~llm_grop.errors.BadInput` when this scene or these objects cannot be
         simulated; called before planning, so bad input costs no work. The default accepts
-        every scene."""
-        return None
+        every scene whose robot carries no more than :meth:`tray_capacity`."""
+        self.check_capacity(scene)
+
+    def check_capacity(self, scene: Scene) -> None:
+        """:class:`~llm_grop.errors.BadInput` when the scene's robot would carry more
+        objects per trip than its tray holds."""
+        most = self.tray_capacity()
+        if scene.robot.capacity > most:
+            holds = f"its tray holds {most}" if most > 1 else "it has no tray and carries 1"
+            raise BadInput(f"robot.capacity: {scene.robot.capacity} objects per trip is more "
+                           f"than simulator {self.name!r} can carry ({holds})")
 
     def check_rendering(self) -> None:
         """:class:`~llm_grop.errors.BadInput` when :meth:`picture` cannot work here (a

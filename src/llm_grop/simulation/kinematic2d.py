@@ -14,6 +14,13 @@ as a black box, as in the paper). It offers primitives only; the executive
   over or falls to the floor, and stays where it came to rest.
 * A placed object lands at its target plus small Gaussian noise, on the object it was
   put on if that rests on the target table.
+* **The tray** (:mod:`llm_grop.simulation.tray`, the 3D robot's): loading puts the held
+  object in a free slot that fits it, unloading takes it back into the hand. They are a
+  place and a pick at the arm's sure reach (the robot's ``reach_min_m``: the tray lies
+  on the base), with a place's and a pick's durations and true chances; a failed load
+  goes as a failed place does (``contact``: still in the hand; ``slid``: elsewhere on the
+  tray, which carries it as well; ``tipped``: on its side on the tray; ``fell``: to the
+  floor). What rides on the tray moves with the base.
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ from llm_grop.geometry.motion import arrival_error, leg_duration_s, path_length_
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner, Simulator
 from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
+from llm_grop.simulation.tray import Tray, load_tray
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, ObjectState, Point, Reason
@@ -108,6 +116,10 @@ class Kinematic2D(Simulator):
             options = replace(options, outcomes=ParametricOutcomes.from_profile(options.truth))
         self.options = options
 
+    def tray_capacity(self) -> int:
+        """The tray's (the 3D robot's, :func:`~llm_grop.simulation.tray.load_tray`)."""
+        return load_tray().capacity
+
     def fitted_profile(self) -> str:
         """The profile its outcomes are drawn from: ``truth``, else ``default`` (whose
         curves are the 2D simulator's own)."""
@@ -130,6 +142,7 @@ class Kinematic2DSession:
         self.pose = scene.robot_start
         self._time_s = 0.0
         self.heights = {i.name: i.spec.height for i in items}
+        self.footprints = {i.name: (i.spec.shape, i.spec.size) for i in items}
         self.states: dict[str, ObjectState] = {}
         for i in items:
             src = scene.source_for(i.name, i.spec.name)
@@ -138,7 +151,12 @@ class Kinematic2DSession:
                 self.states[i.name] = ObjectState(
                     i.name, src.x, src.y, scene.resting_z(i.name, i.spec.name, self.heights),
                     0.0, table=src.table, on=src.on if src.on in self.heights else None)
-        self.carried: list[str] = []
+        #: The object in the hand.
+        self.hand: str | None = None
+        #: What rides on the tray: its slot, its yaw in the base's frame and its tilt
+        #: (radians).
+        self.on_tray: dict[str, tuple[int, float, float]] = {}
+        self.tray: Tray = load_tray()
 
     # -- state ------------------------------------------------------------------------
     @property
@@ -148,8 +166,8 @@ class Kinematic2DSession:
 
     @property
     def held(self) -> str | None:
-        """The object in the hand (the last picked, when it carries several)."""
-        return self.carried[-1] if self.carried else None
+        """The object in the hand."""
+        return self.hand
 
     def robot_pose(self) -> Pose2D:
         """The base's pose (room frame)."""
@@ -158,9 +176,15 @@ class Kinematic2DSession:
     def objects(self) -> dict[str, ObjectState]:
         """Where every object is (room frame); one in the hand rides with the base."""
         out = dict(self.states)
-        for name in self.carried:
-            out[name] = ObjectState(name, self.pose.x, self.pose.y, CARRY_Z_M, self.pose.theta,
-                                    held=True)
+        p = self.pose
+        c, s = math.cos(p.theta), math.sin(p.theta)
+        for name, (k, yaw, tilt) in self.on_tray.items():
+            slot = self.tray.slots[k]
+            out[name] = ObjectState(name, p.x + c * slot.x - s * slot.y,
+                                    p.y + s * slot.x + c * slot.y, self.tray.top_z_m,
+                                    p.theta + yaw, tilt, tray=True)
+        if self.hand is not None:
+            out[self.hand] = ObjectState(self.hand, p.x, p.y, CARRY_Z_M, p.theta, held=True)
         return out
 
     def close(self) -> None:
@@ -235,7 +259,7 @@ class Kinematic2DSession:
     def pick(self, name: str) -> ExecutedStep:
         """One attempt to pick ``name`` where it lies."""
         st = self.states.get(name)
-        if st is None or len(self.carried) >= self.robot.capacity:
+        if st is None or self.hand is not None:
             why = f"no object {name!r}" if st is None else "the hand is full"
             return ExecutedStep("pick", False, 0.0, name, note=f"pick refused: {why}")
         reach, failed = self._out_of_reach("pick", name, st.x, st.y)
@@ -247,7 +271,7 @@ class Kinematic2DSession:
             p = 0.0  # lying on its side or on the floor: the gripper cannot close on it
         if self.rng.random() < p:
             self._lift(name)
-            self.carried.append(name)
+            self.hand = name
             return self._step(ExecutedStep("pick", True, self._seconds("pick"), name,
                                            standing=standing, pose=start))
         return self._step(ExecutedStep("pick", False, self._seconds("pick"), name,
@@ -270,7 +294,7 @@ class Kinematic2DSession:
     def place(self, name: str, x: float, y: float, yaw: float, on: str | None = None
               ) -> ExecutedStep:
         """One attempt to put the held ``name`` at ``(x, y, yaw)`` (table frame)."""
-        if name not in self.carried:
+        if name != self.hand:
             return ExecutedStep("place", False, 0.0, name,
                                 note=f"place refused: the hand does not hold {name!r}")
         q = self.scene.table_to_room(x, y, yaw)
@@ -309,7 +333,7 @@ class Kinematic2DSession:
               tilt_rad: float = 0.0) -> None:
         """``name`` comes to rest at ``(x, y)`` (room frame): on ``on`` when that lies on
         the target table, on the table under it otherwise, or on the floor."""
-        self.carried.remove(name)
+        self.hand = None
         target = self.scene.target_table
         under = self.states.get(on or "")
         if under is not None and under.table == target.name and under.tilt_rad == 0.0:
@@ -324,7 +348,7 @@ class Kinematic2DSession:
     def _drop(self, name: str) -> None:
         """``name`` falls to the floor beside the base, on the first side clear of the
         tables (under the base when neither is)."""
-        self.carried.remove(name)
+        self.hand = None
         p = self.pose
         x, y = p.x, p.y
         for side in (1.0, -1.0):
@@ -338,6 +362,64 @@ class Kinematic2DSession:
     def release(self, name: str) -> float:
         """Put ``name`` down on the floor in front of the base if it is carried (no time in
         2D)."""
-        if name in self.carried:
+        if name == self.hand:
             self._drop(name)
         return 0.0
+
+    # -- the tray ---------------------------------------------------------------------
+    def fits_tray(self, names: Sequence[str]) -> bool:
+        """Whether ``names`` fit on the tray together, besides what rides on it."""
+        taken = [k for k, _, _ in self.on_tray.values()]
+        return self.tray.assign([self.footprints[n] for n in names], taken) is not None
+
+    def load(self, name: str) -> ExecutedStep:
+        """One attempt to put the held ``name`` on the tray, in the smallest free slot
+        that fits it."""
+        taken = [k for k, _, _ in self.on_tray.values()]
+        slots = self.tray.assign([self.footprints.get(name, ("circle", (0.0, 0.0)))], taken)
+        if name != self.hand or slots is None:
+            why = f"the hand does not hold {name!r}" if name != self.hand \
+                else "no free slot on the tray fits it"
+            return ExecutedStep("place", False, 0.0, name, note=f"load refused: {why}",
+                                tray=True)
+        k = slots[0]
+        yaw = self.tray.slots[k].yaw(*self.footprints[name]) or 0.0
+        standing, seconds = self.pose, self._seconds("place")
+        if self.rng.random() >= self.truth.placing(self.robot.reach_min_m, self.robot):
+            reasons = [r for r, _ in self.o.place_failures]
+            weights = np.array([w for _, w in self.o.place_failures], dtype=float)
+            why = reasons[int(self.rng.choice(len(reasons), p=weights / weights.sum()))]
+            if why == "contact":
+                return self._step(ExecutedStep("place", False, seconds, name,
+                                               standing=standing, reason=why, tray=True,
+                                               note="load failed: contact"))
+            if why == "fell":
+                self._drop(name)
+                return self._step(ExecutedStep("place", True, seconds, name,
+                                               standing=standing, tray=True))
+            # Slid: elsewhere on the tray, which carries it as well; tipped: on its side.
+            self.on_tray[name] = (k, yaw, TIPPED_RAD if why == "tipped" else 0.0)
+        else:
+            self.on_tray[name] = (k, yaw, 0.0)
+        self.hand = None
+        return self._step(ExecutedStep("place", True, seconds, name, standing=standing,
+                                       tray=True))
+
+    def unload(self, name: str) -> ExecutedStep:
+        """One attempt to pick ``name`` from the tray."""
+        if name not in self.on_tray or self.hand is not None:
+            why = f"{name!r} is not on the tray" if name not in self.on_tray \
+                else "the hand is full"
+            return ExecutedStep("pick", False, 0.0, name, note=f"unload refused: {why}",
+                                tray=True)
+        standing, seconds = self.pose, self._seconds("pick")
+        tipped = self.on_tray[name][2] > TIPPED_RAD / 2
+        p = 0.0 if tipped else self.truth.manipulation(self.robot.reach_min_m, self.robot)
+        if self.rng.random() < p:
+            del self.on_tray[name]
+            self.hand = name
+            return self._step(ExecutedStep("pick", True, seconds, name, standing=standing,
+                                           tray=True))
+        return self._step(ExecutedStep("pick", False, seconds, name, standing=standing,
+                                       reason="grasp_missed", tray=True,
+                                       note="the grasp on the tray missed"))

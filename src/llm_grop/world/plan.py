@@ -127,6 +127,7 @@ class ExecutedStep:
     reason: Reason | None = None
     arrival_error_m: float | None = None
     arrival_yaw_error_rad: float | None = None
+    tray: bool = False
 
 
 @dataclass(frozen=True)
@@ -135,7 +136,7 @@ class ObjectState:
     (metres), ``yaw`` about the vertical and ``tilt_rad`` of its up axis from the vertical
     (radians); ``table`` is the table it lies on or above (``None``: the floor, or the
     hand), ``on`` the object it rests on (``None``: none, read from contact in physics),
-    ``held`` whether the hand holds it."""
+    ``held`` whether the hand holds it, ``tray`` whether it rides on the robot's tray."""
 
     name: str
     x: float
@@ -146,6 +147,7 @@ class ObjectState:
     table: str | None = None
     on: str | None = None
     held: bool = False
+    tray: bool = False
 
 
 @dataclass(frozen=True)
@@ -156,7 +158,8 @@ class Execution:
     frame, with its height and tilt); ``unplaced`` the requested objects that did not end
     upright on their intended support within tolerance of their target, and
     ``unplaced_reasons`` why, one of :data:`REASONS` per object;
-    ``execution_time_s`` the simulated seconds.
+    ``execution_time_s`` the simulated seconds; ``trips`` the objects carried on each
+    trip, in the order they were picked (a trip of several rides on the robot's tray).
     """
 
     steps: tuple[ExecutedStep, ...]
@@ -165,6 +168,7 @@ class Execution:
     execution_time_s: float
     robot_end: Pose2D
     unplaced_reasons: tuple[tuple[str, Reason], ...] = ()
+    trips: tuple[tuple[str, ...], ...] = ()
 
     @property
     def success(self) -> bool:

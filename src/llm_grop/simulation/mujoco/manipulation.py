@@ -21,6 +21,7 @@ reported by the session's ``navigate``, ``fell``).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -28,6 +29,7 @@ import numpy as np
 
 from llm_grop.simulation.mujoco.tableware import MAX_OPENING_M
 from llm_grop.simulation.mujoco.world import World
+from llm_grop.simulation.mujoco.world_model import TRAY_TOP
 from llm_grop.world.plan import Reason
 
 #: Height of the pre-grasp and pre-place poses above the grasp (metres).
@@ -41,6 +43,9 @@ GRIP_FORCE_N = 2.0
 GRIP_ANGLE_RAD = math.radians(120.0)
 #: ... for this many control periods in a row, after the fingers have closed.
 GRIP_CHECKS = 5
+#: Height of the hand over the tray between the carry posture and the tray, metres (base
+#: frame): the arm swings round above the table it faces, not through it.
+OVER_TRAY_Z_M = 0.8
 #: Where the hand lets go of an abandoned object: beside the base, left then right, below
 #: any table top and clear of the table the robot faces (base frame, metres).
 DROP_POINTS = ((0.0, 0.5, 0.4), (0.0, -0.5, 0.4))
@@ -64,8 +69,10 @@ def _to_base(w: World, x: float, y: float, z: float) -> tuple[float, float, floa
     return (c * dx + s * dy, -s * dx + c * dy, z)
 
 
-def pick(w: World, name: str) -> Attempt:
-    """Grasp tableware ``name`` from where it lies and lift it to the carry posture."""
+def pick(w: World, name: str, *, from_tray: bool = False) -> Attempt:
+    """Grasp tableware ``name`` from where it lies and lift it to the carry posture. The
+    four grasps nearest the base are tried; ``from_tray``, every grasp, farthest first
+    (on the base's own tray the arm reaches out, not in at its column)."""
     t0 = w.d.time
     item = w.wm.objects[name]
     pose = w.object_pose(name)
@@ -77,37 +84,41 @@ def pick(w: World, name: str) -> Attempt:
         x, y = pose.x + c * gx - s * gy, pose.y + s * gx + c * gy
         candidates.append((math.hypot(x - base.x, y - base.y), x, y, pose.z + gz,
                            pose.yaw + g.axis_yaw - base.theta, g.width))
-    candidates.sort(key=lambda c: c[0])
+    candidates.sort(key=lambda c: -c[0] if from_tray else c[0])
     plan = None
-    for _, x, y, z, yaw, width in candidates[:4]:
+    for _, x, y, z, yaw, width in candidates if from_tray else candidates[:4]:
         target = _to_base(w, x, y, z)
         at = w.ik.solve(target, yaw, w.arm_q())
         above = w.ik.solve((target[0], target[1], z + APPROACH_M), yaw, at.q)
-        if at.ok and above.ok:
-            plan = (at.q, above.q, width)
+        # From the tray the arm swings round high over it, not through the table ahead.
+        via = _over(w, target, yaw, above.q) if from_tray and above.ok else None
+        if at.ok and above.ok and (via is not None or not from_tray):
+            plan = (at.q, above.q, width, via)
             break
     if plan is None:
         return _no_ik(w, t0, candidates[0][0])
-    q_at, q_above, width = plan
+    q_at, q_above, width, via = plan
     w.grip_width = width
     w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
-    note = w.move_arm(q_above) or w.move_arm(q_at, speed_radps=0.6, at_surface=True)
+    note = (w.move_arm(via) if via is not None else "") or w.move_arm(q_above) \
+        or w.move_arm(q_at, speed_radps=0.6, at_surface=True)
     if note:
-        return _abort(w, t0, note)
+        return _abort(w, t0, note, via=via)
     w.set_fingers(0.0, 0.4)
     if not _grip(w, name):
         w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
-        return _abort(w, t0, "the pads do not squeeze it", "grasp_missed")
+        return _abort(w, t0, "the pads do not squeeze it", "grasp_missed", via=via)
     w.hold(name)
     note = w.move_arm(q_above, speed_radps=0.6, at_surface=True) \
-        or w.move_arm(w.ik.carry())
+        or (w.move_arm(via) if via is not None else "") or w.move_arm(w.ik.carry())
     if note:
         # Put it back down: a failed pick never leaves the object in the hand.
         w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
-        return _abort(w, t0, note)
+        return _abort(w, t0, note, via=via)
     if w.held != name:
         w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
-        return _abort(w, t0, "it slipped from the pads while lifting", "grasp_missed")
+        return _abort(w, t0, "it slipped from the pads while lifting", "grasp_missed",
+                      via=via)
     return Attempt(True, w.d.time - t0)
 
 
@@ -116,6 +127,42 @@ def place(w: World, name: str, x: float, y: float, yaw: float, support: str) -> 
     metres) turned ``yaw`` (radians), on ``support`` (a table name or tableware), release
     it and let it settle. ``ok`` when the hand let go there."""
     t0 = w.d.time
+    plan = _place_ik(w, name, x, y, yaw, support)
+    if plan is None:
+        b = w.base_pose()
+        return _no_ik(w, t0, math.hypot(x - b.x, y - b.y))
+    return _put_down(w, t0, plan[0], plan[1])
+
+
+def load(w: World, name: str, x: float, y: float, yaws: Sequence[float]) -> Attempt:
+    """Put the held ``name`` down on the robot's tray with its bottom centre at ``(x, y)``
+    (room frame, metres), turned the first of ``yaws`` (radians, room frame) the arm can
+    reach, release it and let it settle."""
+    t0 = w.d.time
+    for yaw in yaws:
+        plan = _place_ik(w, name, x, y, yaw, TRAY_TOP)
+        if plan is not None:
+            over = _over(w, plan[2], plan[3], plan[1])
+            if over is not None:
+                return _put_down(w, t0, plan[0], plan[1], via=over)
+    b = w.base_pose()
+    return _no_ik(w, t0, math.hypot(x - b.x, y - b.y))
+
+
+def _over(w: World, target: tuple[float, float, float], yaw: float, start: np.ndarray
+          ) -> np.ndarray | None:
+    """Joint angles with the hand :data:`OVER_TRAY_Z_M` high over ``target`` (base frame,
+    metres), its pads along ``yaw``; ``None`` when IK finds none."""
+    over = w.ik.solve((target[0], target[1], OVER_TRAY_Z_M), yaw, start)
+    return over.q if over.ok else None
+
+
+def _place_ik(w: World, name: str, x: float, y: float, yaw: float, support: str
+              ) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float], float] | None:
+    """The arm's joint angles (at the release pose, and above it) that put the held
+    ``name`` at ``(x, y, yaw)`` (room frame) on ``support``, with the release pose's
+    grasp point (base frame, metres) and the pads' direction (radians, base frame);
+    ``None`` when IK finds none."""
     z = w.top_z(support)
     hand = w.d.body("hand")
     obj = w.d.body(name)
@@ -134,12 +181,23 @@ def place(w: World, name: str, x: float, y: float, yaw: float, support: str) -> 
     at = w.ik.solve(tb, hand_yaw, w.arm_q())
     above = w.ik.solve((tb[0], tb[1], tb[2] + APPROACH_M), hand_yaw, at.q)
     if not (at.ok and above.ok):
-        return _no_ik(w, t0, math.hypot(x - b.x, y - b.y))
-    note = w.move_arm(above.q) or w.move_arm(at.q, speed_radps=0.5, at_surface=True)
+        return None
+    return at.q, above.q, tb, hand_yaw
+
+
+def _put_down(w: World, t0: float, q_at: np.ndarray, q_above: np.ndarray,
+              via: np.ndarray | None = None) -> Attempt:
+    """Lower the held object through ``q_above`` to ``q_at``, let go, and return to the
+    carry posture, passing ``via`` on the way there and back when given; the attempt
+    since ``t0``."""
+    note = (w.move_arm(via) if via is not None else "") or w.move_arm(q_above) \
+        or w.move_arm(q_at, speed_radps=0.5, at_surface=True)
     if note:
-        return _abort(w, t0, note)
+        return _abort(w, t0, note, via=via)
     w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.25)
-    w.move_arm(above.q, speed_radps=0.6, at_surface=True)
+    w.move_arm(q_above, speed_radps=0.6, at_surface=True)
+    if via is not None:
+        w.move_arm(via)
     w.move_arm(w.ik.carry())
     w.advance(0.2)
     return Attempt(True, w.d.time - t0)
@@ -165,14 +223,18 @@ def _no_ik(w: World, t0: float, reach_m: float) -> Attempt:
     return Attempt(False, w.d.time - t0, f"no IK solution (reach {reach_m:.2f} m)", "no_ik")
 
 
-def _abort(w: World, t0: float, note: str, reason: Reason = "contact") -> Attempt:
-    """Back out of a failed attempt: straight up from where the hand stopped, then to the
-    carry posture (contacts the arm already has are overlooked)."""
+def _abort(w: World, t0: float, note: str, reason: Reason = "contact",
+           via: np.ndarray | None = None) -> Attempt:
+    """Back out of a failed attempt: straight up from where the hand stopped, then
+    (through ``via``, when given) to the carry posture (contacts the arm already has are
+    overlooked)."""
     p = w.d.site("grasp").xpos
     b = _to_base(w, float(p[0]), float(p[1]), float(p[2]) + APPROACH_M)
     up = w.ik.solve(b, _hand_yaw(w), w.arm_q(), elbow_up=False)
     if up.ok:
         w.move_arm(up.q, speed_radps=0.6, at_surface=True)
+    if via is not None:
+        w.move_arm(via, at_surface=True)
     w.move_arm(w.ik.carry(), at_surface=True)
     return Attempt(False, w.d.time - t0, note, reason)
 

@@ -19,6 +19,8 @@ from llm_grop.simulation.mujoco.options import MujocoOptions
 from llm_grop.simulation.mujoco.render import View, picture
 from llm_grop.simulation.mujoco.reporting import Reporter
 from llm_grop.simulation.mujoco.world import World
+from llm_grop.simulation.mujoco.world_model import TRAY_TOP
+from llm_grop.simulation.tray import load_tray
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, ObjectState, Point
 from llm_grop.world.scene import Scene
@@ -32,6 +34,12 @@ START_SEARCH_M = (0.0, 0.1, 0.2, 0.3)
 ON_TABLE_BELOW_M = 0.05
 #: ... and at most this far above it (metres).
 ON_TABLE_ABOVE_M = 0.5
+#: A body rides on the tray when its bottom is within this height band of the tray's top,
+#: metres (a tipped cup lies with its bottom's centre up to half its height above) ...
+ON_TRAY_Z_M = (-0.02, 0.08)
+#: ... and its centre within this distance of the tray's centre beyond the rim's inside
+#: (metres; a tipped object may lean over the rim).
+ON_TRAY_BEYOND_M = 0.05
 
 
 class MujocoSession:
@@ -44,6 +52,9 @@ class MujocoSession:
         self.names = tuple(names)
         self.mark = float(world.d.time)
         self.on_close = on_close
+        self.tray = load_tray()
+        #: The slot each object loaded onto the tray was put in.
+        self.slots: dict[str, int] = {}
         #: What the lidar saw at the end of the last drive (room frame, metres).
         self.seen: tuple[Point, ...] = ()
         self.reporter: Reporter | None = None
@@ -92,8 +103,19 @@ class MujocoSession:
                     table = t.name
                     break
             out[name] = ObjectState(name, x, y, z, p.yaw, tilt, table,
-                                    self.w.support_of(name), held=held)
+                                    self.w.support_of(name), held=held,
+                                    tray=not held and table is None and self._on_tray(x, y, z))
         return out
+
+    def _on_tray(self, x: float, y: float, z: float) -> bool:
+        """Whether a body whose bottom centre is at ``(x, y, z)`` (room frame) rides on the
+        robot's tray."""
+        if TRAY_TOP not in self.w.wm.tops:
+            return False
+        b = self.w.base_pose()
+        top = self.w.top_z(TRAY_TOP)
+        return math.hypot(x - b.x, y - b.y) <= self.tray.radius_m + ON_TRAY_BEYOND_M \
+            and top + ON_TRAY_Z_M[0] <= z <= top + ON_TRAY_Z_M[1]
 
     def picture(self, view: View = "room", size: tuple[int, int] | None = None,
                 camera: str | None = None) -> np.ndarray:
@@ -193,6 +215,63 @@ class MujocoSession:
         return self._step(ExecutedStep(
             "place", result.ok, 0.0, name, standing=standing, reason=result.reason,
             note="" if result.ok else f"place failed: {result.note}"))
+
+    # -- the tray ---------------------------------------------------------------------
+    def _footprint(self, name: str) -> tuple[str, tuple[float, float]]:
+        item = self.w.wm.objects[name]
+        return item.shape, (float(item.size[0]), float(item.size[1]))
+
+    def _taken(self, besides: Sequence[str]) -> list[int]:
+        """The slots of what rides on the tray now, ``besides`` left out."""
+        riding = [n for n in self.slots if n not in besides]
+        if not riding:
+            return []
+        states = self.objects()
+        return [self.slots[n] for n in riding if states[n].tray]
+
+    def fits_tray(self, names: Sequence[str]) -> bool:
+        """Whether ``names`` fit on the tray together, besides what rides on it."""
+        taken = self._taken(names)
+        return self.tray.assign([self._footprint(n) for n in names], taken) is not None
+
+    def load(self, name: str) -> ExecutedStep:
+        """One attempt to put the held ``name`` on the tray, in the smallest free slot
+        that fits it, turned as the slot wants it (a round object: whichever way the arm
+        reaches), release it and let it settle."""
+        taken = self._taken([name])
+        slots = self.tray.assign([self._footprint(name)], taken) \
+            if name in self.w.wm.objects else None
+        if self.w.held != name or TRAY_TOP not in self.w.wm.tops or slots is None:
+            why = f"the hand does not hold {name!r}" if self.w.held != name \
+                else "no free slot on the tray fits it"
+            return ExecutedStep("place", False, 0.0, name, note=f"load refused: {why}",
+                                tray=True)
+        k = slots[0]
+        slot, b = self.tray.slots[k], self.w.base_pose()
+        c, s = math.cos(b.theta), math.sin(b.theta)
+        x, y = b.x + c * slot.x - s * slot.y, b.y + s * slot.x + c * slot.y
+        shape, size = self._footprint(name)
+        along = b.theta + (slot.yaw(shape, size) or 0.0)
+        turns = (0.0, math.pi) if shape != "circle" else \
+            tuple(math.pi * j / 4 for j in (0, 4, 2, -2, 1, -1, 3, -3))
+        self.slots[name] = k
+        result = manipulation.load(self.w, name, x, y, [along + t for t in turns])
+        return self._step(ExecutedStep(
+            "place", result.ok, 0.0, name, standing=b, reason=result.reason, tray=True,
+            note="" if result.ok else f"load failed: {result.note}"))
+
+    def unload(self, name: str) -> ExecutedStep:
+        """One attempt to pick ``name`` from the tray."""
+        if self.w.held is not None:
+            return ExecutedStep("pick", False, 0.0, name, tray=True,
+                                note=f"unload refused: the hand holds {self.w.held!r}")
+        standing = self.w.base_pose()
+        result = manipulation.pick(self.w, name, from_tray=True)
+        if result.ok:
+            self.slots.pop(name, None)
+        return self._step(ExecutedStep(
+            "pick", result.ok, 0.0, name, standing=standing, reason=result.reason, tray=True,
+            note="" if result.ok else f"unload failed: {result.note}"))
 
     def release(self, name: str) -> float:
         """Lower ``name``, if the hand holds it, in front of the base and let it fall to

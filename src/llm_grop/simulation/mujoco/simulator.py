@@ -8,6 +8,9 @@ offering the executive one attempt at a time (:class:`MujocoSession`).
   beams) stops it, pushes the chair by physics, and it backs off.
 * Manipulation (:mod:`~llm_grop.simulation.mujoco.manipulation`): IK, pre-grasp, grasp,
   close, lift, carry; pre-place, lower, release, settle.
+* The tray (``assets/tray.xml``): with ``robot.capacity`` above 1 the base carries it;
+  loading is a place onto it, unloading a pick from it, and what rides on it rides by
+  friction (it may slide or tip when the base stops hard).
 * Truth: every object's pose, tilt and support (from contact) are read from the settled
   bodies.
 """
@@ -28,6 +31,7 @@ from llm_grop.simulation.mujoco.session import MujocoSession
 from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.simulation.mujoco.world_model import ObjectStart, build, check_scene
+from llm_grop.simulation.tray import load_tray
 from llm_grop.world.arrangement import Item, Placement, item_placement
 from llm_grop.world.scene import Scene
 
@@ -59,6 +63,11 @@ class MujocoSimulator(Simulator):
         (``benchmarks/fit_profile.py``)."""
         return "mujoco"
 
+    def tray_capacity(self) -> int:
+        """The tray's (``assets/tray.xml``): with ``robot.capacity`` above 1 the base
+        carries it."""
+        return load_tray().capacity
+
     def picture(self, view: View = "table", size: tuple[int, int] | None = None,
                 camera: str | None = None) -> np.ndarray:
         """An RGB image of the last episode as it ended, from ``camera`` (``None``: for the
@@ -78,9 +87,7 @@ class MujocoSimulator(Simulator):
         """:class:`BadInput` when this scene or these objects cannot be simulated (called
         before planning, so bad input costs no work)."""
         check_scene(scene)
-        if scene.robot.capacity != 1:
-            raise BadInput(f"scene {scene.name!r}: robot.capacity: the 3D robot has one "
-                           f"gripper and carries 1 object, got {scene.robot.capacity}")
+        self.check_capacity(scene)
         for item in items:
             tableware(item_placement(item))
 
@@ -111,7 +118,7 @@ class MujocoSimulator(Simulator):
         o = self.options
         wm = build(scene, starts, timestep_s=o.timestep_s, image_size=o.image_size,
                    traction_n=o.base.traction_n, chair_mass_kg=o.chair_mass_kg,
-                   chair_friction=o.chair_friction)
+                   chair_friction=o.chair_friction, tray=scene.robot.capacity > 1)
         world = World(wm, scene, self._ik, lidar=o.lidar, grasp=o.grasp,
                       speed_mps=scene.robot.speed_mps,
                       turn_speed_radps=scene.robot.turn_speed_radps, on_frame=self.on_frame,

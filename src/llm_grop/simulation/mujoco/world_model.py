@@ -1,6 +1,7 @@
 """The dining room as a MuJoCo model, built from the scene with MuJoCo's model editor.
 
-The robot comes from ``assets/robot.xml``; floor, walls, tables with legs (a round one: a
+The robot comes from ``assets/robot.xml`` (with the tray of ``assets/tray.xml`` on its
+base when it carries several objects per trip); floor, walls, tables with legs (a round one: a
 cylinder top on a pedestal), chairs with seat, back and legs, a placemat in front of each
 diner's seat (drawn only), and the tableware, each in its kind's colour, are added around
 it, with the named cameras (:data:`~llm_grop.simulation.mujoco.options.CAMERAS`). World
@@ -32,6 +33,7 @@ from llm_grop.simulation.mujoco.looks import (
     lathe,
 )
 from llm_grop.simulation.mujoco.tableware import Tableware, add_body
+from llm_grop.simulation.tray import TRAY_XML
 from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.kind_colors import TABLE_TOP, hex_rgb, kind_rgb
 from llm_grop.world.scene import Chair, Scene, SceneTable
@@ -97,7 +99,8 @@ class WorldModel:
         fingers: per geom, whether it is a finger or pad (they may touch a table top).
         owner: per geom, the tableware it belongs to ("" for none).
         parts: tableware name -> per geom, whether the geom is part of it.
-        tops: table name -> geom id of its top.
+        tops: table name -> geom id of its top; :data:`TRAY_TOP` -> the tray's top, when
+            the robot has one.
         welds: tableware name -> id of its grasp weld.
         chairs: chair name -> body id.
     """
@@ -115,9 +118,21 @@ class WorldModel:
     chairs: dict[str, int]
 
 
+#: The tray's body, the prefix of its names in the model ...
+TRAY = "tray"
+#: ... and the key of its top in :attr:`WorldModel.tops` (no table's name: a scene's tables
+#: have names of words).
+TRAY_TOP = "robot's tray"
+
+
 def robot_xml() -> str:
     """The path of the robot's MJCF file."""
     return str(resources.files("llm_grop.simulation.mujoco").joinpath("assets/robot.xml"))
+
+
+def tray_xml() -> str:
+    """The path of the tray's MJCF file."""
+    return str(resources.files("llm_grop.simulation").joinpath(TRAY_XML))
 
 
 def check_scene(scene: Scene) -> None:
@@ -144,13 +159,19 @@ def check_scene(scene: Scene) -> None:
 
 def build(scene: Scene, starts: Sequence[ObjectStart], *, timestep_s: float = 0.004,
           image_size: tuple[int, int] = (640, 480), traction_n: float = 580.0,
-          chair_mass_kg: float = 5.0, chair_friction: float = 0.5) -> WorldModel:
+          chair_mass_kg: float = 5.0, chair_friction: float = 0.5, tray: bool = False
+          ) -> WorldModel:
     """The dining room of ``scene`` with the robot at its start and the tableware at
     ``starts``; the base's wheels transmit at most ``traction_n`` newtons, and chairs
-    weigh ``chair_mass_kg`` and slide with friction ``chair_friction``. Raises
-    :class:`BadInput` when the scene cannot be built."""
+    weigh ``chair_mass_kg`` and slide with friction ``chair_friction``; with ``tray`` the
+    base carries the tray. Raises :class:`BadInput` when the scene cannot be built."""
     check_scene(scene)
     spec = mujoco.MjSpec.from_file(robot_xml())
+    if tray:
+        # Fixed to the base (no joint): it moves with it, and what rides on it rides by
+        # friction.
+        spec.body("base").add_frame().attach_body(
+            mujoco.MjSpec.from_file(tray_xml()).body(TRAY), f"{TRAY}/", "")
     for act in spec.actuators:
         if act.name in ("base_x", "base_y"):
             act.forcerange = [-traction_n, traction_n]
@@ -363,6 +384,8 @@ def _index(model: mujoco.MjModel, scene: Scene, objects: dict[str, Tableware]) -
         owner[g] = body_owner.get(body, "")
         furniture[g] = not robot[g] and not owner[g] and name != "floor"
     tops = {t.name: model.geom(f"top:{t.name}").id for t in scene.tables}
+    if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"{TRAY}/tray_top") >= 0:
+        tops[TRAY_TOP] = model.geom(f"{TRAY}/tray_top").id
     welds = {n: model.equality(f"grip:{n}").id for n in objects}
     parts = {n: np.array([o == n for o in owner]) for n in objects}
     chairs = {c.name: model.body(f"chair:{c.name}").id for c in scene.chairs}
