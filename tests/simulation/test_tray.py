@@ -23,11 +23,11 @@ from llm_grop.simulation.mujoco.simulator import MujocoSimulator
 from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.simulation.mujoco.world_model import TRAY_TOP, ObjectStart, build
-from llm_grop.simulation.tray import load_tray
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.request import items_from_names
 from llm_grop.world.robot import Robot
+from llm_grop.world.tray import load_tray
 from scenes import placement, two_table_room
 
 SETTING = "a dinner plate, a dinner fork, a dinner knife and a water cup"

@@ -14,7 +14,7 @@ as a black box, as in the paper). It offers primitives only; the executive
   over or falls to the floor, and stays where it came to rest.
 * A placed object lands at its target plus small Gaussian noise, on the object it was
   put on if that rests on the target table.
-* **The tray** (:mod:`llm_grop.simulation.tray`, the 3D robot's): loading puts the held
+* **The tray** (:mod:`llm_grop.world.tray`, the 3D robot's): loading puts the held
   object in a free slot that fits it, unloading takes it back into the hand. They are a
   place and a pick at the arm's sure reach (the robot's ``reach_min_m``: the tray lies
   on the base), with a place's and a pick's durations and true chances; a failed load
@@ -38,11 +38,11 @@ from llm_grop.geometry.motion import arrival_error, leg_duration_s, path_length_
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.simulation.base import PathPlanner, Simulator
 from llm_grop.simulation.outcomes import Outcomes, ParametricOutcomes
-from llm_grop.simulation.tray import Tray, load_tray
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, ObjectState, Point, Reason
 from llm_grop.world.scene import Scene
+from llm_grop.world.tray import Tray, load_tray
 
 log = logging.getLogger(__name__)
 
@@ -117,7 +117,7 @@ class Kinematic2D(Simulator):
         self.options = options
 
     def tray_capacity(self) -> int:
-        """The tray's (the 3D robot's, :func:`~llm_grop.simulation.tray.load_tray`)."""
+        """The tray's (the 3D robot's, :func:`~llm_grop.world.tray.load_tray`)."""
         return load_tray().capacity
 
     def fitted_profile(self) -> str:

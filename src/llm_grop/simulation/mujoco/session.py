@@ -20,10 +20,10 @@ from llm_grop.simulation.mujoco.render import View, picture
 from llm_grop.simulation.mujoco.reporting import Reporter
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.simulation.mujoco.world_model import TRAY_TOP
-from llm_grop.simulation.tray import load_tray
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.plan import ExecutedStep, ObjectState, Point
 from llm_grop.world.scene import Scene
+from llm_grop.world.tray import load_tray
 
 log = logging.getLogger(__name__)
 

@@ -8,7 +8,7 @@ offering the executive one attempt at a time (:class:`MujocoSession`).
   beams) stops it, pushes the chair by physics, and it backs off.
 * Manipulation (:mod:`~llm_grop.simulation.mujoco.manipulation`): IK, pre-grasp, grasp,
   close, lift, carry; pre-place, lower, release, settle.
-* The tray (``assets/tray.xml``): with ``robot.capacity`` above 1 the base carries it;
+* The tray (``world/tray.xml``): with ``robot.capacity`` above 1 the base carries it;
   loading is a place onto it, unloading a pick from it, and what rides on it rides by
   friction (it may slide or tip when the base stops hard).
 * Truth: every object's pose, tilt and support (from contact) are read from the settled
@@ -31,9 +31,9 @@ from llm_grop.simulation.mujoco.session import MujocoSession
 from llm_grop.simulation.mujoco.tableware import tableware
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.simulation.mujoco.world_model import ObjectStart, build, check_scene
-from llm_grop.simulation.tray import load_tray
 from llm_grop.world.arrangement import Item, Placement, item_placement
 from llm_grop.world.scene import Scene
+from llm_grop.world.tray import load_tray
 
 __all__ = ["MujocoOptions", "MujocoSimulator"]
 
@@ -64,7 +64,7 @@ class MujocoSimulator(Simulator):
         return "mujoco"
 
     def tray_capacity(self) -> int:
-        """The tray's (``assets/tray.xml``): with ``robot.capacity`` above 1 the base
+        """The tray's (``world/tray.xml``): with ``robot.capacity`` above 1 the base
         carries it."""
         return load_tray().capacity
 

@@ -1,6 +1,6 @@
 """The dining room as a MuJoCo model, built from the scene with MuJoCo's model editor.
 
-The robot comes from ``assets/robot.xml`` (with the tray of ``assets/tray.xml`` on its
+The robot comes from ``assets/robot.xml`` (with the tray of ``world/tray.xml`` on its
 base when it carries several objects per trip); floor, walls, tables with legs (a round one: a
 cylinder top on a pedestal), chairs with seat, back and legs, a placemat in front of each
 diner's seat (drawn only), and the tableware, each in its kind's colour, are added around
@@ -33,10 +33,10 @@ from llm_grop.simulation.mujoco.looks import (
     lathe,
 )
 from llm_grop.simulation.mujoco.tableware import Tableware, add_body
-from llm_grop.simulation.tray import TRAY_XML
 from llm_grop.world.geometry2d import Box, Disc
 from llm_grop.world.kind_colors import TABLE_TOP, hex_rgb, kind_rgb
 from llm_grop.world.scene import Chair, Scene, SceneTable
+from llm_grop.world.tray import tray_xml_path
 
 #: Furniture collision bits (robot.xml): collides with the robot (2) and tableware (4).
 FURNITURE = (1, 2 | 4)
@@ -132,7 +132,7 @@ def robot_xml() -> str:
 
 def tray_xml() -> str:
     """The path of the tray's MJCF file."""
-    return str(resources.files("llm_grop.simulation").joinpath(TRAY_XML))
+    return str(tray_xml_path())
 
 
 def check_scene(scene: Scene) -> None:

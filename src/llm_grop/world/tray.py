@@ -1,6 +1,8 @@
-"""The robot's tray, as its MJCF file declares it (``mujoco/assets/tray.xml``), read
-without MuJoCo so that both simulators carry alike: how many objects it holds, how high
-its top is, and its slots, where the arm puts objects down.
+"""The robot's tray, as its MJCF file declares it (``tray.xml`` beside this module), read
+without MuJoCo: both simulators carry alike from it (the MuJoCo world attaches that very
+file to the base) and the planner groups objects into trips that fit it. It says how many
+objects the tray holds, how high its top is, and its slots, where the arm puts objects
+down.
 
 An object fits a slot when its footprint lies inside the slot's rectangle: a round one
 within the slot's shorter side, a long one along its longer side. A trip's objects fit the
@@ -15,11 +17,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
+from importlib.resources.abc import Traversable
 
 from llm_grop.errors import BadInput
 
-#: The tray's MJCF file, in the MuJoCo simulator's assets.
-TRAY_XML = "mujoco/assets/tray.xml"
+#: The tray's MJCF file, beside this module (package data of :mod:`llm_grop.world`).
+TRAY_XML = "tray.xml"
 
 
 @dataclass(frozen=True)
@@ -87,9 +90,13 @@ class Tray:
 
 @cache
 def load_tray() -> Tray:
-    """The packaged tray (``mujoco/assets/tray.xml``); its file is read once."""
-    text = resources.files("llm_grop.simulation").joinpath(TRAY_XML).read_text()
-    return tray_from_xml(text, TRAY_XML)
+    """The packaged tray (``world/tray.xml``); its file is read once."""
+    return tray_from_xml(tray_xml_path().read_text(), f"world/{TRAY_XML}")
+
+
+def tray_xml_path() -> Traversable:
+    """The packaged tray's MJCF file (the MuJoCo world builds the tray from it)."""
+    return resources.files("llm_grop.world").joinpath(TRAY_XML)
 
 
 def tray_from_xml(text: str, where: str) -> Tray:
