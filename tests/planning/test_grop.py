@@ -189,7 +189,7 @@ def test_trips_are_the_best_over_every_order_and_cut(catalog: Catalog) -> None:
     import itertools
     from dataclasses import replace
 
-    from llm_grop.planning.trips import cut_order, plan_trips, stand_distances
+    from llm_grop.planning.trips import cut_order, plan_trips, trip_costs
     from llm_grop.world.robot import Robot
 
     names = ["dinner plate", "dinner fork", "dinner knife", "mug", "bread"]
@@ -198,16 +198,63 @@ def test_trips_are_the_best_over_every_order_and_cut(catalog: Catalog) -> None:
                  placement("dinner knife", 0.2, 0.0, "box", (0.02, 0.23)),
                  placement("mug", 0.3, 0.15, size=(0.09, 0.09)),
                  placement("bread", -0.3, 0.15, size=(0.08, 0.08)))
-    scene = replace(two_table_room(), robot=Robot(capacity=2))
+    # Quick loads and unloads, so that trips of two pay off.
+    scene = replace(two_table_room(), robot=Robot(capacity=2, pick_time_s=0.5,
+                                                  place_time_s=0.5))
     ctx = _ctx(catalog, names, scene=scene)
     cand = choose(ctx, [cfg])
     before = [(0, 3)]  # as if the mug rested on the plate
-    trips, saved = plan_trips(ctx, cand.order, cand.stand, 2, before)
-    between = stand_distances(ctx, cand.stand)
+    costs = trip_costs(ctx, cand.stand, 2)
+    trips, saved = plan_trips(ctx, cand.order, cand.stand, 2, before, costs)
     order = [j for t in trips for j in t]
     assert sorted(order) == list(range(5)) and order.index(0) < order.index(3)
-    assert all(1 <= len(t) <= 2 for t in trips) and saved >= 0
-    ours = cut_order(ctx, order, cand.stand, 2, between)[1]
-    best = min(cut_order(ctx, p, cand.stand, 2, between)[1]
+    assert all(1 <= len(t) <= 2 for t in trips) and saved > 0
+    assert all(costs.fits(t) for t in trips)
+    ours = cut_order(ctx, order, cand.stand, costs)[1]
+    best = min(cut_order(ctx, p, cand.stand, costs)[1]
                for p in itertools.permutations(range(5)) if p.index(0) < p.index(3))
     assert ours == pytest.approx(best)
+
+
+def test_trips_fit_the_tray_and_pay_for_their_loads(catalog: Catalog) -> None:
+    from dataclasses import replace
+
+    from llm_grop.planning.trips import cut_order, handling_s, plan_trips, trip_costs
+    from llm_grop.world.robot import Robot
+    from llm_grop.world.tray import load_tray
+
+    names = ["dinner plate", "dinner plate 2", "dinner fork", "dinner knife"]
+    items = items_from_names(["dinner plate", "dinner plate", "dinner fork",
+                              "dinner knife"], catalog)
+    assert [i.name for i in items] == names
+    cfg = config(placement("dinner plate", -0.3, 0.0),
+                 placement("dinner plate 2", 0.3, 0.0),
+                 placement("dinner fork", -0.5, 0.0, "box", (0.025, 0.2)),
+                 placement("dinner knife", 0.5, 0.0, "box", (0.02, 0.23)))
+
+    def planned(pick_s: float) -> tuple[PlanningContext, object, tuple[tuple[int, ...], ...],
+                                        float]:
+        robot = Robot(capacity=4, pick_time_s=pick_s, place_time_s=pick_s)
+        ctx = PlanningContext(replace(two_table_room(), robot=robot), items)
+        cand = choose(ctx, [cfg])
+        trips, saved = plan_trips(ctx, cand.order, cand.stand, 4)
+        return ctx, cand, trips, saved
+
+    # Loads and unloads nearly free: the two plates never share the tray (one large slot).
+    ctx, cand, trips, saved = planned(0.1)
+    tray = load_tray()
+    assert saved > 0 and any(len(t) > 1 for t in trips)
+    for t in trips:
+        assert len(t) == 1 or tray.assign([(items[j].spec.shape, items[j].spec.size)
+                                           for j in t]) is not None
+        assert not {0, 1} <= set(t)
+    # A trip of several costs one load and one unload per object at the belief's times.
+    assert handling_s(ctx) == pytest.approx(0.2)
+    costs = trip_costs(ctx, cand.stand, 4)
+    apart = cut_order(ctx, [2, 3], cand.stand, replace(costs, capacity=1))
+    priced = cut_order(ctx, [2, 3], cand.stand, replace(costs, capacity=2, handling_s=1e3))
+    assert priced[0] == ((2,), (3,)) and priced[1] == pytest.approx(apart[1])
+    # Loads and unloads as slow as the robot's own picks and places (8 s each) cost more
+    # than the drive trips save here: one object per trip, as with capacity 1.
+    _, cand8, trips8, saved8 = planned(8.0)
+    assert saved8 == 0 and all(len(t) == 1 for t in trips8)

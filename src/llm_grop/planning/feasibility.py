@@ -109,6 +109,17 @@ def feasibility_profile(name: str) -> ParametricFeasibility:
     return ParametricFeasibility(**asdict(load_profile(name).curves))
 
 
+#: Success probabilities below this count as this in a plan's expected retries (a plan
+#: never chooses a step it believes impossible).
+MIN_RETRY_P = 0.05
+
+
+def expected_failures(p: float) -> float:
+    """Expected failed attempts before an action of success probability ``p`` succeeds,
+    ``1/p - 1``, with ``p`` counted down to :data:`MIN_RETRY_P`."""
+    return 1.0 / max(p, MIN_RETRY_P) - 1.0
+
+
 def placing(model: FeasibilityModel, reach_m: ArrayLike, robot: Robot) -> Floats:
     """Probability that a place at these reaches succeeds
     (:meth:`FeasibilityModel.placing`)."""

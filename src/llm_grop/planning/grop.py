@@ -26,10 +26,10 @@ import numpy as np
 from llm_grop import seeds
 from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import leg_duration_s
-from llm_grop.planning.feasibility import action_times, placing
+from llm_grop.planning.feasibility import action_times, expected_failures, placing
 from llm_grop.planning.navigation import Navigator
 from llm_grop.planning.sequencing import best_order, refine, supports_before
-from llm_grop.planning.trips import plan_trips
+from llm_grop.planning.trips import handling_s, plan_trips
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.fidelity import Considered, Fidelity
@@ -47,9 +47,6 @@ UNIFORM_REACH = 0.5
 #: it, by local search, with a stated bound on its gap to the optimum
 #: (:func:`~llm_grop.planning.sequencing.best_order`).
 EXACT_LIMIT = 12
-#: Success probabilities below this count as this in a plan's expected retries (a plan
-#: never chooses a step it believes impossible).
-MIN_RETRY_P = 0.05
 #: Beyond :data:`EXACT_LIMIT` objects, the orders of this many configurations of best
 #: score are refined (:func:`~llm_grop.planning.sequencing.refine`) before one is chosen.
 REFINE = 3
@@ -219,28 +216,34 @@ def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed
                configurations: int) -> Plan:
     """The chosen candidate as steps, with an OMPL path for every navigation leg.
 
-    With ``capacity > 1`` the objects are grouped into trips
+    With ``capacity > 1`` the objects are grouped into trips that fit the tray
     (:mod:`llm_grop.planning.trips`): all of a trip's pickups, then its placements; the
-    standing positions are those of capacity 1, the order is searched anew. Both the
-    trips and one object per trip get paths, and the plan of shorter expected duration
-    is kept, so more capacity is never slower in the plan.
+    standing positions are those of capacity 1, the order is searched anew. Each object
+    on a trip of several also costs its load onto the tray and its unload
+    (:func:`~llm_grop.planning.trips.handling_s`), which the plan's expected duration
+    counts. Both the trips and one object per trip get paths, and the plan of shorter
+    expected duration is kept, so more capacity is never slower in the plan.
     """
     robot = ctx.scene.robot
     before = supports_before([p.name for p in cand.placements],
                              {p.name: p.on for p in cand.placements})
+    failed_s = action_times(ctx.model, robot).failed_attempt_s
     trips, _ = plan_trips(ctx, cand.order, cand.stand, robot.capacity, before)
     steps = _steps(ctx, cand, trips, navigator, seed)
+    on_tray = sum(len(t) for t in trips if len(t) > 1)
+    extra_s = on_tray * handling_s(ctx) if on_tray else 0.0
     # The candidate's cost assumed one object per trip; credit what the trips save.
     saved_s = 0.0
     if len(trips) < len(cand.order):
         singles = _steps(ctx, cand, tuple((j,) for j in cand.order), navigator, seed)
-        saved_s = _duration(singles) - _duration(steps)
+        saved_s = expected_duration_s(singles, failed_s) \
+            - expected_duration_s(steps, failed_s) - extra_s
         if saved_s <= 0:
             steps, saved_s, trips = singles, 0.0, tuple((j,) for j in cand.order)
+            extra_s = 0.0
     names = tuple(cand.placements[j].name for trip in trips for j in trip)
     return Plan(order=names, steps=steps, configuration=cand.placements,
-                expected_duration_s=expected_duration_s(
-                    steps, action_times(ctx.model, robot).failed_attempt_s),
+                expected_duration_s=expected_duration_s(steps, failed_s) + extra_s,
                 configuration_index=cand.index, utility=cand.utility + saved_s,
                 feasibility=cand.feasibility, cost_s=cand.cost_s - saved_s,
                 configurations_considered=configurations, fidelity=cand.fidelity,
@@ -256,8 +259,8 @@ def _duration(steps: Sequence[Step]) -> float:
 def expected_duration_s(steps: Sequence[Step], failed_attempt_s: float) -> float:
     """Expected seconds of ``steps`` with retries: each step's duration, plus
     ``failed_attempt_s`` for each of its expected failed attempts (``1/p - 1`` for success
-    probability ``p``, counted down to :data:`MIN_RETRY_P`)."""
-    retries = sum(1.0 / max(s.success_p, MIN_RETRY_P) - 1.0 for s in steps)
+    probability ``p``, counted down to :data:`~llm_grop.planning.feasibility.MIN_RETRY_P`)."""
+    retries = sum(expected_failures(s.success_p) for s in steps)
     return _duration(steps) + failed_attempt_s * retries
 
 
