@@ -14,6 +14,7 @@ from cli_support import one_line_error
 from llm_grop.api import run
 from llm_grop.cli import main
 from llm_grop.errors import BadInput
+from llm_grop.files.scene_file import load_scene
 from llm_grop.settings import RunSettings
 from llm_grop.simulation.kinematic2d import Kinematic2D
 from llm_grop.simulation.mujoco.arm import ArmIK
@@ -27,6 +28,7 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.request import items_from_names
 from llm_grop.world.robot import Robot
+from llm_grop.world.scene import Scene
 from llm_grop.world.tray import load_tray
 from scenes import placement, two_table_room
 
@@ -103,9 +105,17 @@ def _counts(steps, tray: bool) -> int:  # type: ignore[no-untyped-def]
     return sum(s.tray == tray for s in steps)
 
 
+def _quick() -> Scene:
+    """The packaged scene with a robot whose picks and places (so loads and unloads) are
+    quick, so that the planner's trips pay for their loads."""
+    base = load_scene()
+    return replace(base, robot=replace(base.robot, pick_time_s=0.1, place_time_s=0.1))
+
+
 def test_2d_trips_through_the_executive_and_capacity_one_unchanged() -> None:
-    four = run(SETTING, method="grop", seed=0, chairs=0, capacity=4)
-    one = run(SETTING, method="grop", seed=0, chairs=0)
+    quick = _quick()
+    four = run(SETTING, method="grop", seed=0, chairs=0, capacity=4, scene=quick)
+    one = run(SETTING, method="grop", seed=0, chairs=0, scene=quick)
     assert four.success and one.success
     assert any(len(t) > 1 for t in four.execution.trips)
     loaded = {s.object for s in four.execution.steps if s.tray and s.action == "place" and s.ok}
@@ -191,8 +201,9 @@ def test_a_hard_stop_moves_what_rides_in_mujoco() -> None:
 
 
 def test_mujoco_trip_loads_and_unloads_with_the_arm() -> None:
-    result = run(SETTING, method="grop", seed=0, chairs=0, capacity=4,
-                 simulator=MujocoSimulator())
+    # The default belief, which takes the robot's quick times (the fitted one has its own).
+    result = run(SETTING, method="grop", seed=0, chairs=0, capacity=4, scene=_quick(),
+                 feasibility="default", simulator=MujocoSimulator())
     ex = result.execution
     placed = {p.name for p in result.final.placements} - set(ex.unplaced)
 

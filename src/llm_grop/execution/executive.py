@@ -4,10 +4,10 @@
   path, later ones a path the robot plans from where it stopped. When a goal has no path,
   or its attempts run out, the plan's fallback goals are tried in turn. When every goal
   fails, the object of the leg is given up.
-* **Picks and places.** Each object gets ``manip_attempts`` picks and as many places,
-  re-grasps and re-places included. An attempt the arm cannot reach (``no_ik``) is
-  followed by a move to the leg's next standing position: its fallbacks, then a fresh
-  arrival at the planned one.
+* **Picks and places** (:mod:`llm_grop.execution.manipulation`). Each object gets
+  ``manip_attempts`` picks and as many places, re-grasps and re-places included. An
+  attempt the arm cannot reach (``no_ik``) is followed by a move to the leg's next
+  standing position: its fallbacks, then a fresh arrival at the planned one.
 * **Success after release.** A released object is judged where it came to rest
   (:func:`~llm_grop.execution.judge.judge`). One that slid or landed on the wrong support
   but stands upright on the table is re-grasped from where it lies and placed again;
@@ -35,7 +35,6 @@ target table as it is, and an object is placed exactly when it is in place there
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import cast
@@ -43,12 +42,11 @@ from typing import cast
 import numpy as np
 
 from llm_grop.execution.judge import (
-    clear_of,
     final_placements,
     judge,
-    judged_place,
     table_pose,
 )
+from llm_grop.execution.manipulation import pick, place
 from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS, ExecutionPolicy
 from llm_grop.execution.tray import load, unload
 from llm_grop.execution.trips import Carry, Trip, plan_trips, split_trip
@@ -60,14 +58,6 @@ from llm_grop.world.plan import ExecutedStep, Execution, ObjectState, Plan, Poin
 from llm_grop.world.scene import Scene
 
 log = logging.getLogger(__name__)
-
-#: A place that fails as the one before it did, its object coming to rest within this
-#: distance of where it rested then (metres), is not tried a third time: repeating an
-#: action that the world answers the same way only spends time (the hand that knocks a
-#: neighbour aside, a spot that something else now fills). Physics repeats itself to a
-#: millimetre or two; two random 2D slides land this close about once in 400 pairs.
-REPEAT_M = 0.005
-
 
 def execute(simulator: Simulator, plan: Plan, scene: Scene, items: Sequence[Item],
             rng: np.random.Generator, *, replan: PathPlanner,
@@ -171,7 +161,7 @@ class _Executive:
             self._between(name, False)
             if name in self.given_up:
                 return
-        why = self.pick(name)
+        why = pick(self, name)
         if why is not None:
             self.give_up(name, why)
         elif tray:
@@ -198,7 +188,7 @@ class _Executive:
                 self.give_up(name, why)
                 self._between(name, False)
                 return
-        self.place(name)
+        place(self, name)
         self._between(name, True)
 
     def result(self) -> Execution:
@@ -269,106 +259,6 @@ class _Executive:
         self.used[(name, action)] = n
         return n
 
-    def pick(self, name: str) -> Reason | None:
-        """Pick ``name`` from where it lies, within its pick attempts: ``None`` when it is
-        in the hand, else why not (one that tipped or fell is not tried again)."""
-        why: Reason = "grasp_missed"
-        while self._left(name, "pick") > 0:
-            state = self.s.objects()[name]
-            if state.table is None:
-                return "fell"
-            if state.tilt_rad > self.policy.max_tilt_rad:
-                return "tipped"
-            attempt = self._use(name, "pick")
-            done = self.s.pick(name)
-            self.record(replace(done, object=name, attempt=attempt))
-            self.check_placed(name)
-            if done.ok:
-                return None
-            if done.reason is None:
-                raise RuntimeError(f"the simulator refused to pick {name!r}: {done.note}")
-            why = done.reason
-            if done.reason == "no_ik" and self._left(name, "pick") > 0 \
-                    and not self.next_stand(name):
-                break
-        return why
-
-    def place(self, name: str) -> bool:
-        """Place the held ``name`` at its target, within its place attempts: re-grasping
-        it where it came to rest when it stands upright on the table, giving it up when
-        it tipped, fell, failed the same way twice in a row or its attempts ran out."""
-        t = self.targets[name]
-        landed_on: str | None = None
-        last: tuple[Reason | None, float, float] | None = None
-        while self._left(name, "place") > 0:
-            if not self.s.objects()[name].held:
-                # Lost on the way (it slipped from the hand in transit).
-                self.give_up(name, self._last_reason(name, "fell"))
-                return False
-            on = self._support(t.on)
-            attempt = self._use(name, "place")
-            target = self.goal(name, self.s.objects()) if on is not None else (t.x, t.y)
-            # Aimed beside what it landed on last time, but judged against its target; an
-            # object that goes on another keeps aiming at its support's centre.
-            x, y = self._beside(name, *target, landed_on) \
-                if landed_on is not None and on is None else target
-            done, state = judged_place(self.s, self.scene, name, x, y, t.yaw, on, self.policy,
-                                       target)
-            self.record(replace(done, object=name, attempt=attempt))
-            self.check_placed(name)
-            if done.ok:
-                self.placed[name] = state
-                return True
-            if done.reason is None:
-                raise RuntimeError(f"the simulator refused to place {name!r}: {done.note}")
-            if state.held:
-                # It never left the hand: try again, from elsewhere when out of reach.
-                last = None
-                if done.reason == "no_ik" and self._left(name, "place") > 0 \
-                        and not self.next_stand(name):
-                    break
-                continue
-            landed_on = state.on if done.reason == "wrong_support" and state.on != on \
-                else None
-            again = last is not None and last[0] == done.reason \
-                and math.hypot(state.x - last[1], state.y - last[2]) < REPEAT_M
-            last = (done.reason, state.x, state.y)
-            if (done.reason in ("tipped", "fell") or again or state.table != self.scene.target
-                    or self._left(name, "place") <= 0):
-                self.give_up(name, done.reason)
-                return False
-            if self.disturbed:
-                # Put back what this place moved (its support, say) with the hand empty.
-                self.replace_disturbed()
-                if not self.back_to(name):
-                    self.give_up(name, done.reason)
-                    return False
-            if self.pick(name) is not None:
-                self.give_up(name, done.reason)
-                return False
-        self.give_up(name, self._last_reason(name, "contact"))
-        return False
-
-    def _support(self, on: str | None) -> str | None:
-        """``on`` when that object lies upright on the target table, else ``None``: an
-        object whose support is missing or tipped goes on the table."""
-        state = self.s.objects().get(on or "")
-        if state is None or state.held or state.table != self.scene.target \
-                or state.tilt_rad > self.policy.max_tilt_rad:
-            return None
-        return on
-
-    def _beside(self, name: str, x: float, y: float, other: str) -> tuple[float, float]:
-        """``(x, y)`` (table frame) moved clear of ``other`` as it lies now, by at most
-        0.8 of the place tolerance; unchanged when that is not enough."""
-        state, planned = self.s.objects().get(other), self.targets.get(other)
-        if state is None or planned is None or state.table != self.scene.target:
-            return x, y
-        ox, oy, oyaw = table_pose(state, self.scene)
-        moved = clear_of(x, y, self.targets[name], replace(planned, x=ox, y=oy, yaw=oyaw),
-                         0.8 * self.policy.max_offset_m)
-        return moved if moved is not None else (x, y)
-
     def goal(self, name: str, states: Mapping[str, ObjectState]) -> tuple[float, float]:
         """Where ``name`` belongs, table frame (metres), with the objects as ``states``
         says: its target, translated with its support when it goes on an object that lies
@@ -421,10 +311,10 @@ class _Executive:
                     or min(self._left(name, "pick"), self._left(name, "place")) <= 0
                     or not self.back_to(name)):
                 self.given_up[name] = "disturbed"
-            elif self.pick(name) is not None:
+            elif pick(self, name) is not None:
                 self.give_up(name, "disturbed")
             else:
-                self.place(name)
+                place(self, name)
 
     # -- bookkeeping ------------------------------------------------------------------
     def give_up(self, name: str, reason: Reason) -> None:
