@@ -42,7 +42,7 @@ from llm_grop.methods.registry import get_method
 from llm_grop.planning.feasibility import feasibility_profile
 from llm_grop.planning.grop import Candidate, evaluate
 from llm_grop.planning.sequencing import supports_before
-from llm_grop.planning.trips import cut_order, plan_trips, stand_distances
+from llm_grop.planning.trips import cut_order, plan_trips, trip_costs
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.simulation.scenario import prepare_episode
 from llm_grop.world.arrangement import Configuration, Item
@@ -114,7 +114,8 @@ def planned(method: str, items: tuple[Item, ...], request: str, seed: int,
 
 
 def trip_gap(n: int, capacity: int, seed: int) -> tuple[float, float, float]:
-    """Driving distance, metres, of the trips GROP plans for ``n`` objects (the first
+    """Cost, seconds (driving, and each object's load and unload on a trip of several;
+    trips fit the tray), of the trips GROP plans for ``n`` objects (the first
     ``n`` of :data:`OBJECTS`, random arrangement) with a robot of ``capacity``; of the
     capacity-1 order's best cut into trips (what GROP planned up to version 0.17); and
     the least over every order of the objects and every cut of it into trips (the same
@@ -125,18 +126,18 @@ def trip_gap(n: int, capacity: int, seed: int) -> tuple[float, float, float]:
     cand = evaluate(ctx, Configuration(episode.plan.configuration),
                     episode.plan.configuration_index)
     assert isinstance(cand, Candidate)
-    between = stand_distances(ctx, cand.stand)
+    costs = trip_costs(ctx, cand.stand, capacity)
     before = supports_before([p.name for p in cand.placements],
                              {p.name: p.on for p in cand.placements})
-    trips, _ = plan_trips(ctx, cand.order, cand.stand, capacity, before)
-    ours = cut_order(ctx, [j for t in trips for j in t], cand.stand, capacity, between)[1]
-    cut = cut_order(ctx, cand.order, cand.stand, capacity, between)[1]
+    trips, _ = plan_trips(ctx, cand.order, cand.stand, capacity, before, costs)
+    ours = cut_order(ctx, [j for t in trips for j in t], cand.stand, costs)[1]
+    cut = cut_order(ctx, cand.order, cand.stand, costs)[1]
     best = min(ours, cut)
     for perm in itertools.permutations(range(n)):
         pos = {j: k for k, j in enumerate(perm)}
         if any(pos[a] > pos[b] for a, b in before):
             continue
-        best = min(best, cut_order(ctx, perm, cand.stand, capacity, between)[1])
+        best = min(best, cut_order(ctx, perm, cand.stand, costs)[1])
     return ours, cut, best
 
 
@@ -183,7 +184,7 @@ def main() -> None:
                args.seeds,
                lambda seed, n=n, r=request: planning_s("llm-grop", diners(n), r, seed, prefs))
     print("Trip grouping (capacity > 1) against every order and every cut into trips "
-          "(driving distance; same standing positions):")
+          "(seconds: driving, loads and unloads; trips fit the tray; same standing positions):")
     for capacity in (2, 3):
         for n in (int(k) for k in args.trip_objects.split(",") if k):
             gaps, cut_gaps, optimal = [], [], 0
