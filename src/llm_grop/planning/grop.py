@@ -28,6 +28,7 @@ from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import leg_duration_s
 from llm_grop.planning.feasibility import action_times, placing
 from llm_grop.planning.navigation import Navigator
+from llm_grop.planning.reach import repair
 from llm_grop.planning.sequencing import best_order, refine, supports_before
 from llm_grop.planning.trips import plan_trips
 from llm_grop.planning.utility import PlanningContext
@@ -182,8 +183,24 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
     reasons: list[str] = []
     found: list[Candidate] = []
     considered: list[Considered] = []
-    for i, config in enumerate(configs):
+    configs = list(configs)
+    cache: dict[int, np.ndarray] = {}
+    pool = tuple(configs)
+    for i, config in enumerate(pool):
         cand = evaluate(ctx, config, i, policy, rng)
+        if policy == "utility":
+            # A diner's objects beyond sure reach: the repaired configuration, when it
+            # scores better (planning/reach.py).
+            fixed = repair(ctx, config, fid[i] if fidelity else None, pool, cache)
+            if fixed is not None:
+                other = evaluate(ctx, fixed.configuration, i, policy, rng)
+                if not isinstance(other, str) and (
+                        isinstance(cand, str)
+                        or other.utility - per_m * fixed.fidelity.infidelity_m
+                        > cand.utility - per_m * fid[i].infidelity_m):
+                    log.debug("configuration %d: repaired for reach (moved %s, taken %s)",
+                              i + 1, fixed.shifted_m, fixed.taken_from)
+                    cand, configs[i], fid[i] = other, fixed.configuration, fixed.fidelity
         if isinstance(cand, str):
             log.debug("configuration %d: no plan: %s", i + 1, cand)
             reasons.append(cand)
