@@ -71,8 +71,7 @@ def main() -> None:
             failed.update(f"{s.action} {s.reason}" for s in result.execution.steps
                           if not s.ok and s.reason is not None)
             unplaced.update(why for _, why in result.execution.unplaced_reasons)
-            steps = result.plan.steps
-            for k, s in enumerate(steps):
+            for s in result.plan.steps:
                 if s.action == "place" and s.pose is not None and s.standing is not None:
                     q = result.scene.table_to_room(s.pose[0], s.pose[1])
                     reach.append(math.hypot(q.x - s.standing.x, q.y - s.standing.y))

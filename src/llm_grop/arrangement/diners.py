@@ -5,14 +5,8 @@ names of one diner; its relations, gaps and the diner's distance are then given 
 diner with that setting, renamed to their objects ("dinner plate 2" for the second
 diner's plate). Each diner's setting is laid out and sampled in their place's frame
 (:mod:`llm_grop.geometry.places`): what the LLM calls "to the left of" is to that diner's
-left. The k-th configuration of the whole table joins every diner's k-th *nearest*
-configuration (:func:`nearest_first`: ranked by how far its farthest object reaches from
-the diner's edge, nearest first), turned into the table frame. The diners' samples are
-independent, so pairing them by rank rather than by draw loses no configuration of
-anyone's, and the table's first configuration is every diner's most compact one: what a
-robot serving from the diners' side reaches most surely (joined by draw, a table of six
-almost always holds some diner's farthest sample). Nothing here knows any place-setting
-convention.
+left. The k-th configuration of the whole table joins every diner's k-th configuration,
+turned into the table frame. Nothing here knows any place-setting convention.
 """
 
 from __future__ import annotations
@@ -24,7 +18,6 @@ import numpy as np
 from shapely.geometry import Polygon
 
 from llm_grop import seeds
-from llm_grop.arrangement.predicates import Footprint
 from llm_grop.arrangement.sampling import violations
 from llm_grop.arrangement.setting import Sampled, Setting
 from llm_grop.errors import BadInput, Infeasible
@@ -148,23 +141,6 @@ def _joined(fidelity: Sequence[Fidelity]) -> Fidelity:
                     None if worst is None else worst.edge_realised_m)
 
 
-def far_extent_m(config: Configuration, box: Table) -> float:
-    """How far, metres, the farthest footprint of ``config`` (a diner's configuration, in
-    its place frame) reaches from the diner's edge of ``box`` (the place, whose -y edge
-    is the diner's)."""
-    return max((p.y + Footprint.of_placement(p).hy for p in config.placements),
-               default=-box.depth / 2) + box.depth / 2
-
-
-def nearest_first(sampled: Sampled, box: Table) -> Sampled:
-    """``sampled`` with its configurations (and their fidelity) ranked by
-    :func:`far_extent_m`, nearest first; ties keep the order of the draw."""
-    rank = sorted(range(len(sampled.configurations)),
-                  key=lambda c: far_extent_m(sampled.configurations[c], box))
-    return replace(sampled, configurations=tuple(sampled.configurations[c] for c in rank),
-                   fidelity=tuple(sampled.fidelity[c] for c in rank))
-
-
 def arrange_diners(items: Sequence[Item], table: Table, catalog: Catalog, seed: int,
                    say: Callable[[str], None], ask: Ask, sample: Sample) -> Diners:
     """Every diner's setting (see the module doc). Raises :class:`BadInput` when a diner's
@@ -190,7 +166,7 @@ def arrange_diners(items: Sequence[Item], table: Table, catalog: Catalog, seed: 
                            f"place ({place.box.width:.2f} x {place.box.depth:.2f} m) cannot "
                            f"hold the setting ({exc})") from None
         settings.append(mine)
-        sampled.append(nearest_first(one, place.box))
+        sampled.append(one)
     m = min(len(s.configurations) for s in sampled)
     configs = tuple(Configuration(tuple(
         p for k, (s, place) in enumerate(zip(sampled, seated, strict=True))

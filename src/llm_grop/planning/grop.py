@@ -189,18 +189,7 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
     for i, config in enumerate(pool):
         cand = evaluate(ctx, config, i, policy, rng)
         if policy == "utility":
-            # A diner's objects beyond sure reach: the repaired configuration, when it
-            # scores better (planning/reach.py).
-            fixed = repair(ctx, config, fid[i] if fidelity else None, pool, cache)
-            if fixed is not None:
-                other = evaluate(ctx, fixed.configuration, i, policy, rng)
-                if not isinstance(other, str) and (
-                        isinstance(cand, str)
-                        or other.utility - per_m * fixed.fidelity.infidelity_m
-                        > cand.utility - per_m * fid[i].infidelity_m):
-                    log.debug("configuration %d: repaired for reach (moved %s, taken %s)",
-                              i + 1, fixed.shifted_m, fixed.taken_from)
-                    cand, configs[i], fid[i] = other, fixed.configuration, fixed.fidelity
+            cand = _repaired(ctx, cand, i, configs, fid, pool, cache, bool(fidelity))
         if isinstance(cand, str):
             log.debug("configuration %d: no plan: %s", i + 1, cand)
             reasons.append(cand)
@@ -215,6 +204,18 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
                                      cand.score))
         if not best_of_all:
             break
+    if not found and policy == "utility" and fidelity:
+        # Nothing has a plan as sampled: a stated setting may move farther, any way.
+        for i in range(len(pool)):
+            cand = _repaired(ctx, reasons[i], i, configs, fid, pool, cache, True, True)
+            if not isinstance(cand, str):
+                cand = replace(cand, fidelity=fid[i],
+                               score=cand.utility - per_m * fid[i].infidelity_m)
+                found.append(cand)
+                considered[i] = Considered(i, cand.utility, cand.feasibility, cand.cost_s,
+                                           fid[i], cand.score)
+                if not best_of_all:
+                    break
     if not found:
         raise Infeasible(f"no plan for any of {len(configs)} configuration(s): "
                          f"{max(set(reasons), key=reasons.count)}")
@@ -230,6 +231,30 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
         found = better + found
     best = max(found, key=lambda c: (c.score, c.utility, -c.index))
     return replace(best, considered=tuple(considered))
+
+
+def _repaired(ctx: PlanningContext, cand: Candidate | str, i: int,
+              configs: list[Configuration], fid: list[Fidelity],
+              pool: Sequence[Configuration], cache: dict[int, np.ndarray], stated: bool,
+              last_resort: bool = False) -> Candidate | str:
+    """``cand`` (configuration ``i``'s plan, or why it has none), or the plan of
+    configuration ``i`` repaired for reach (:func:`~llm_grop.planning.reach.repair`) when
+    that scores better or only it has a plan; ``configs[i]`` and ``fid[i]`` then become
+    the repaired configuration and its fidelity."""
+    per_m = 100.0 * ctx.options.fidelity_w_s_per_cm
+    fixed = repair(ctx, configs[i], fid[i] if stated else None, pool, cache, last_resort)
+    if fixed is None:
+        return cand
+    other = evaluate(ctx, fixed.configuration, i)
+    if isinstance(other, str):
+        return cand
+    if not isinstance(cand, str) and other.utility - per_m * fixed.fidelity.infidelity_m \
+            <= cand.utility - per_m * fid[i].infidelity_m:
+        return cand
+    log.debug("configuration %d: repaired for reach (moved %s m, taken from %s)", i + 1,
+              fixed.shifted_m, fixed.taken_from)
+    configs[i], fid[i] = fixed.configuration, fixed.fidelity
+    return other
 
 
 def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed: int,

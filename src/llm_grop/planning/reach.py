@@ -11,15 +11,23 @@ and GROP keeps the repaired configuration when it scores better (its utility les
 fidelity penalty), so nothing is repaired that GROP would not prefer:
 
 * **Stated geometry** (the configuration comes with a fidelity measure: relations and
-  gaps were stated): the diner's setting is moved as a whole towards its diner, by the
-  least whole centimetre that brings every object within sure reach (else the shift
-  within :data:`MAX_SHIFT_M` that brings the farthest object nearest), while every
-  footprint stays on the top and clear of the other diners' objects. A rigid move keeps
-  every relation and gap between the setting's objects; what it changes is the setting's
-  distance from the diner's edge, so the shift is added to the configuration's
-  ``origin_shift_m`` (charged by the fidelity weight) and the edge distance is measured
-  again. The planner never reads a relation: a ``center`` relation of a diner's place
-  is not protected (a shift of a few centimetres rarely takes an object out of it).
+  gaps were stated): the diner's setting is moved as a whole, towards its diner or along
+  its place's width (never away from the diner), by the shortest move in whole
+  centimetres that brings every object within sure reach (else the move within
+  :data:`MAX_SHIFT_M` that brings the farthest object nearest), while every footprint
+  stays on the top and clear of the other diners' objects, and the setting's stated
+  distance from the diner's edge is kept within the sampler's tolerance
+  (:data:`EDGE_TOLERANCE_M`). Along the width matters when a chair blocks the standing
+  positions in front of the diner. A rigid move keeps every relation and gap between
+  the setting's objects; what it changes is where the setting lies in the place, so the
+  move's length is added to the configuration's ``origin_shift_m`` (charged by the
+  fidelity weight) and the distance from the diner's edge is measured again. The
+  planner never reads a relation: a ``center`` relation of a diner's place is not
+  protected (a move of a few centimetres rarely breaks it).
+* **Last resort**: when no configuration has a plan even so (an object beyond the arm's
+  reach of every free standing position in all M), a stated setting may move up to
+  :data:`LAST_RESORT_SHIFT_M` in any direction, its edge distance too, rather than the
+  episode failing; the plan's fidelity reports what that cost.
 * **No stated geometry** (random configurations, GROP's and the baselines'): the diner's
   objects are taken as they lie in another of the M configurations, the one whose
   farthest object is reached most surely, when they are clear of the other diners'.
@@ -33,9 +41,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
+from shapely.affinity import translate
 from shapely.geometry.base import BaseGeometry
 
 from llm_grop.geometry.footprint import footprint
@@ -44,6 +54,7 @@ from llm_grop.planning.feasibility import placing
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement
 from llm_grop.world.fidelity import Fidelity
+from llm_grop.world.table import Table
 
 Floats = NDArray[np.float64]
 
@@ -51,8 +62,16 @@ Floats = NDArray[np.float64]
 #: succeeds at least this fraction as often as a place at the arm's best reach (with the
 #: default belief: within about 0.63 m of the base's centre).
 SURE = 0.95
-#: The largest move, metres, of a setting with stated geometry towards its diner.
+#: The largest move, metres, of a setting with stated geometry.
 MAX_SHIFT_M = 0.05
+#: How far short of its stated distance from the diner's edge a setting may come by a
+#: move, metres: the sampler's tolerance of a stated gap
+#: (:data:`llm_grop.arrangement.fidelity.GAP_TOLERANCE_M`, which the planner may not
+#: import; a test keeps the two equal).
+EDGE_TOLERANCE_M = 0.015
+#: The largest move, metres, when no configuration has a plan otherwise (a last resort,
+#: in any direction, away from the diner too).
+LAST_RESORT_SHIFT_M = 0.15
 #: The step, metres, in which such a move is searched.
 STEP_M = 0.01
 #: Overlap, square metres, below which two footprints count as touching, not overlapping.
@@ -89,13 +108,15 @@ def best_place_p(ctx: PlanningContext, placements: Sequence[Placement]) -> Float
 
 
 def repair(ctx: PlanningContext, config: Configuration, fidelity: Fidelity | None,
-           pool: Sequence[Configuration], cache: dict[int, Floats] | None = None
-           ) -> Repaired | None:
+           pool: Sequence[Configuration], cache: dict[int, Floats] | None = None,
+           last_resort: bool = False) -> Repaired | None:
     """``config`` with every diner whose objects are not all within sure reach repaired
     (see the module doc), or ``None`` when no diner needs or allows it. ``fidelity``:
     the configuration's measure (``None``: nothing was stated, and the diners' objects
     may be taken from the other configurations of ``pool``; ``cache`` keeps
-    :func:`best_place_p` per configuration of the pool, by index)."""
+    :func:`best_place_p` per configuration of the pool, by index). ``last_resort``: a
+    stated setting may move up to :data:`LAST_RESORT_SHIFT_M` in any direction (for when
+    no configuration has a plan otherwise)."""
     placements = list(config.placements)
     if not placements or any(p.diner is None for p in placements):
         return None
@@ -103,21 +124,25 @@ def repair(ctx: PlanningContext, config: Configuration, fidelity: Fidelity | Non
     seats = table.seats
     if max(p.diner for p in placements if p.diner is not None) >= len(seats):
         return None
-    seated = places(table, seats)
-    top = outline(table)
+    seated, top = _places(table)
     sure = sure_p(ctx)
     best = best_place_p(ctx, placements)
     shifted: dict[int, float] = {}
     taken: dict[int, int] = {}
+    shapes: list[BaseGeometry | None] = [None] * len(placements)
     for d in sorted({p.diner for p in placements if p.diner is not None}):
         mine = [j for j, p in enumerate(placements) if p.diner == d]
         now = float(best[mine].min())
         if now >= sure:
             continue
-        others = [_shape(p) for p in placements if p.diner != d]
+        for j, p in enumerate(placements):
+            if shapes[j] is None and p.diner != d:
+                shapes[j] = _shape(p)
+        others = [g for j, g in enumerate(shapes) if g is not None and j not in mine]
         group = [placements[j] for j in mine]
         if fidelity is not None:
-            found = _shift(ctx, group, seated[d], top, others, sure, now)
+            found = _shift(ctx, group, seated[d], top, others, sure, now, last_resort,
+                           _toward_m(fidelity, group, seated[d]))
             if found is None:
                 continue
             group, shifted[d] = found
@@ -127,7 +152,7 @@ def repair(ctx: PlanningContext, config: Configuration, fidelity: Fidelity | Non
                 continue
             group, taken[d] = swap
         for j, q in zip(mine, group, strict=True):
-            placements[j] = q
+            placements[j], shapes[j] = q, None
         best[mine] = best_place_p(ctx, group)
     if not shifted and not taken:
         return None
@@ -138,15 +163,21 @@ def repair(ctx: PlanningContext, config: Configuration, fidelity: Fidelity | Non
     return Repaired(repaired, fid, shifted, taken)
 
 
+@lru_cache(maxsize=16)
+def _places(table: Table) -> tuple[tuple[Place, ...], BaseGeometry]:
+    """The diners' places at ``table`` and its outline (the same top in every
+    configuration and episode, so they are kept)."""
+    return places(table, table.seats), outline(table)
+
+
 def _shape(p: Placement) -> BaseGeometry:
     return footprint(p.x, p.y, p.yaw, p.shape, p.size)
 
 
-def _fits(group: Sequence[Placement], top: BaseGeometry,
+def _fits(group: Sequence[BaseGeometry], top: BaseGeometry,
           others: Sequence[BaseGeometry]) -> bool:
     """Whether every footprint of ``group`` lies on ``top`` and clear of ``others``."""
-    for p in group:
-        shape = _shape(p)
+    for shape in group:
         if not top.contains(shape):
             return False
         if any(shape.intersection(o).area > OVERLAP_M2 for o in others
@@ -155,29 +186,77 @@ def _fits(group: Sequence[Placement], top: BaseGeometry,
     return True
 
 
-def _shift(ctx: PlanningContext, group: Sequence[Placement], place: Place,
-           top: BaseGeometry, others: Sequence[BaseGeometry], sure: float, now: float
-           ) -> tuple[list[Placement], float] | None:
-    """``group`` moved towards its diner (the place frame's -y) by the least whole step
-    that brings all of it within sure reach, else by the step within :data:`MAX_SHIFT_M`
-    that reaches its farthest object best; ``None`` when no step gains."""
+@lru_cache(maxsize=64)
+def _offsets(place: Place, last_resort: bool = False) -> tuple[Floats, Floats, Floats]:
+    """The moves a stated setting may make, nearest first: in the place frame, whole
+    steps of :data:`STEP_M` along its width and towards its diner (never away), within
+    :data:`MAX_SHIFT_M` (``last_resort``: every direction, within
+    :data:`LAST_RESORT_SHIFT_M`); as ``(k, 2)`` table-frame vectors, their lengths and
+    how far each goes towards the diner, metres."""
+    limit = LAST_RESORT_SHIFT_M if last_resort else MAX_SHIFT_M
+    steps = int(round(limit / STEP_M))
+    u, v = np.meshgrid(np.arange(-steps, steps + 1),
+                       np.arange(-steps if last_resort else 0, steps + 1))
+    u, v = STEP_M * u.ravel(), STEP_M * v.ravel()
+    length = np.hypot(u, v)
+    keep = (length > 0) & (length <= limit + 1e-9)
+    u, v, length = u[keep], v[keep], length[keep]
+    order = np.lexsort((np.abs(u), length))
+    u, v, length = u[order], v[order], length[order]
     c, s = np.cos(place.yaw), np.sin(place.yaw)
-    toward = (float(s), float(-c))   # the place frame's -y, in the table frame
-    best: tuple[float, float, list[Placement]] | None = None
-    for k in range(1, int(round(MAX_SHIFT_M / STEP_M)) + 1):
-        delta = k * STEP_M
-        moved = [replace(p, x=p.x + delta * toward[0], y=p.y + delta * toward[1])
-                 for p in group]
-        if not _fits(moved, top, others):
-            break  # a step farther leaves the top or meets a neighbour sooner still
-        low = float(best_place_p(ctx, moved).min())
-        if best is None or low > best[0] + 1e-12:
-            best = (low, delta, moved)
-        if low >= sure:
-            break
-    if best is None or best[0] <= now + GAIN:
+    # Place-frame (u, -v) in the table frame: u along the place's x, v towards the diner.
+    return np.stack([c * u + s * v, s * u - c * v], axis=1), length, v
+
+
+def _shift(ctx: PlanningContext, group: Sequence[Placement], place: Place,
+           top: BaseGeometry, others: Sequence[BaseGeometry], sure: float, now: float,
+           last_resort: bool = False, toward_m: float = MAX_SHIFT_M
+           ) -> tuple[list[Placement], float] | None:
+    """``group`` moved whole, along its place's width or towards its diner (by at most
+    ``toward_m``; with ``last_resort``, any way), by the
+    shortest move (whole steps of :data:`STEP_M`, at most :data:`MAX_SHIFT_M`) that brings
+    all of it within sure reach, else by the move that reaches its farthest object best;
+    with the move's length, metres. ``None`` when no move gains."""
+    offsets, length, toward = _offsets(place, last_resort)
+    if not last_resort:
+        keep = toward <= toward_m + 1e-9
+        offsets, length = offsets[keep], length[keep]
+    box = ctx.scene.target_table.box
+    c, s = np.cos(box.yaw), np.sin(box.yaw)
+    room = np.stack([c * offsets[:, 0] - s * offsets[:, 1],
+                     s * offsets[:, 0] + c * offsets[:, 1]], axis=1)
+    pts = ctx.targets_room(group).reshape(-1, 2)
+    # Only the standing positions that could reach some object after some move.
+    near = np.hypot(pts[:, None, 0] - ctx.cand_xy[None, :, 0],
+                    pts[:, None, 1] - ctx.cand_xy[None, :, 1]).min(axis=0)
+    stands = ctx.cand_xy[near <= ctx.scene.robot.reach_max_m + length.max()]
+    if not len(stands):
         return None
-    return best[2], best[1]
+    moved_xy = pts[None, :, :] + room[:, None, :]                     # (k, n, 2)
+    reach = np.hypot(moved_xy[..., None, 0] - stands[None, None, :, 0],
+                     moved_xy[..., None, 1] - stands[None, None, :, 1])
+    p = np.asarray(placing(ctx.model, reach, ctx.scene.robot), dtype=float)
+    low = p.max(axis=2).min(axis=1)                                   # (k,)
+    # The shortest move that makes all of it sure (offsets are nearest first), else the
+    # move that reaches its farthest object best; each tried only if it fits.
+    sure_k = [k for k in range(len(low)) if low[k] >= sure]
+    rest = sorted((k for k in range(len(low)) if now + GAIN < low[k] < sure),
+                  key=lambda k: (-low[k], length[k]))
+    shapes = [_shape(q) for q in group]
+    table = ctx.scene.target_top
+    if not table.is_round:
+        # A rectangle's top holds a shape exactly when it holds the shape's bounds.
+        lo = np.min([g.bounds[:2] for g in shapes], axis=0)
+        hi = np.max([g.bounds[2:] for g in shapes], axis=0)
+        half = np.array([table.width / 2, table.depth / 2])
+        on_top = np.all((lo + offsets >= -half) & (hi + offsets <= half), axis=1)
+        sure_k = [k for k in sure_k if on_top[k]]
+        rest = [k for k in rest if on_top[k]]
+    for k in (*sure_k, *rest):
+        dx, dy = float(offsets[k, 0]), float(offsets[k, 1])
+        if _fits([translate(g, dx, dy) for g in shapes], top, others):
+            return [replace(q, x=q.x + dx, y=q.y + dy) for q in group], float(length[k])
+    return None
 
 
 def _swap(ctx: PlanningContext, group: Sequence[Placement], pool: Sequence[Configuration],
@@ -198,11 +277,32 @@ def _swap(ctx: PlanningContext, group: Sequence[Placement], pool: Sequence[Confi
         if low <= now + GAIN or (found is not None and low <= found[0] + 1e-12):
             continue
         variant = [by_name[n] for n in names]
-        if _fits(variant, top, others):
+        if _fits([_shape(q) for q in variant], top, others):
             found = (low, k, variant)
     if found is None:
         return None
     return found[2], found[1]
+
+
+def _edge_m(p: Placement, place: Place) -> float:
+    """The gap, metres, between ``p``'s footprint and its diner's edge of the table."""
+    _, y = place.to_place(p.x, p.y)
+    turn = p.yaw - place.yaw
+    hy = p.size[0] / 2 if p.shape == "circle" else \
+        (abs(np.sin(turn)) * p.size[0] + abs(np.cos(turn)) * p.size[1]) / 2
+    return float(y) - hy + place.box.depth / 2
+
+
+def _toward_m(fid: Fidelity, group: Sequence[Placement], place: Place) -> float:
+    """How far, metres, ``group`` may move towards its diner: until its origin's distance
+    from the diner's edge is :data:`EDGE_TOLERANCE_M` short of the stated one (no stated
+    distance: :data:`MAX_SHIFT_M`)."""
+    origins = set(fid.origin.split(", ")) if fid.origin else set()
+    mine = [p for p in group if p.name in origins]
+    if fid.edge_stated_m is None or not mine:
+        return MAX_SHIFT_M
+    short = _edge_m(mine[0], place) - (fid.edge_stated_m - EDGE_TOLERANCE_M)
+    return min(max(short, 0.0), MAX_SHIFT_M)
 
 
 def _refit(fid: Fidelity, placements: Sequence[Placement], seated: Sequence[Place],
@@ -218,12 +318,7 @@ def _refit(fid: Fidelity, placements: Sequence[Placement], seated: Sequence[Plac
     for p in placements:
         if p.name not in origins or p.diner is None:
             continue
-        place = seated[p.diner]
-        _, y = place.to_place(p.x, p.y)
-        turn = p.yaw - place.yaw
-        hy = p.size[0] / 2 if p.shape == "circle" else \
-            (abs(np.sin(turn)) * p.size[0] + abs(np.cos(turn)) * p.size[1]) / 2
-        edge = float(y) - hy + place.box.depth / 2
+        edge = _edge_m(p, seated[p.diner])
         if worst is None or abs(edge - fid.edge_stated_m) > abs(worst - fid.edge_stated_m):
             worst = edge
     return fid if worst is None else replace(fid, edge_realised_m=worst)
