@@ -25,9 +25,10 @@ fidelity penalty), so nothing is repaired that GROP would not prefer:
   planner never reads a relation: a ``center`` relation of a diner's place is not
   protected (a move of a few centimetres rarely breaks it).
 * **Last resort**: when no configuration has a plan even so (an object beyond the arm's
-  reach of every free standing position in all M), a stated setting may move up to
-  :data:`LAST_RESORT_SHIFT_M` in any direction, its edge distance too, rather than the
-  episode failing; the plan's fidelity reports what that cost.
+  reach of every free standing position in all M), a stated setting makes the shortest
+  move, up to :data:`LAST_RESORT_SHIFT_M` in any direction (its edge distance too), that
+  brings every object within the arm's reach at all, rather than the episode failing;
+  the plan's fidelity reports what that cost.
 * **No stated geometry** (random configurations, GROP's and the baselines'): the diner's
   objects are taken as they lie in another of the M configurations, the one whose
   farthest object is reached most surely, when they are clear of the other diners';
@@ -78,6 +79,9 @@ EDGE_TOLERANCE_M = 0.015
 #: The largest move, metres, when no configuration has a plan otherwise (a last resort,
 #: in any direction, away from the diner too).
 LAST_RESORT_SHIFT_M = 0.15
+#: A last resort's move is the shortest that lets every object be placed with at least
+#: this probability (that is, at all).
+REACHABLE_P = 1e-3
 #: The step, metres, in which such a move is searched.
 STEP_M = 0.01
 #: Overlap, square metres, below which two footprints count as touching, not overlapping.
@@ -212,7 +216,9 @@ def _offsets(place: Place, last_resort: bool = False) -> tuple[Floats, Floats, F
     length = np.hypot(u, v)
     keep = (length > 0) & (length <= limit + 1e-9)
     u, v, length = u[keep], v[keep], length[keep]
-    order = np.lexsort((np.abs(u), length))
+    # Shortest first; of equal length, the one least across the place, then towards the
+    # diner rather than away.
+    order = np.lexsort((-v, np.abs(u), length))
     u, v, length = u[order], v[order], length[order]
     c, s = np.cos(place.yaw), np.sin(place.yaw)
     # Place-frame (u, -v) in the table frame: u along the place's x, v towards the diner.
@@ -250,6 +256,9 @@ def _shift(ctx: PlanningContext, group: Sequence[Placement], place: Place,
     low = p.max(axis=2).min(axis=1)                                   # (k,)
     # The shortest move that makes all of it sure (offsets are nearest first), else the
     # move that reaches its farthest object best; each tried only if it fits.
+    if last_resort:
+        # Not to be reached surely, only at all, by the shortest move that does it.
+        sure = min(sure, REACHABLE_P)
     sure_k = [k for k in range(len(low)) if low[k] >= sure]
     rest = sorted((k for k in range(len(low)) if now + GAIN < low[k] < sure),
                   key=lambda k: (-low[k], length[k]))
