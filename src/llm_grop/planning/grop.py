@@ -28,7 +28,7 @@ from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import leg_duration_s
 from llm_grop.planning.feasibility import action_times, placing
 from llm_grop.planning.navigation import Navigator
-from llm_grop.planning.reach import repair
+from llm_grop.planning.reach import LAST_RESORT_P, repair
 from llm_grop.planning.sequencing import best_order, refine, supports_before
 from llm_grop.planning.trips import plan_trips
 from llm_grop.planning.utility import PlanningContext
@@ -207,7 +207,10 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
     if not found and policy == "utility" and fidelity:
         # Nothing has a plan as sampled: a stated setting may move farther, any way.
         for i in range(len(pool)):
-            cand = _repaired(ctx, reasons[i], i, configs, fid, pool, cache, True, True)
+            cand = reasons[i]
+            for p_min in LAST_RESORT_P:
+                cand = _repaired(ctx, cand, i, configs, fid, pool, cache, True, p_min,
+                                 pool[i], fidelity[i])
             if not isinstance(cand, str):
                 cand = replace(cand, fidelity=fid[i],
                                score=cand.utility - per_m * fid[i].infidelity_m)
@@ -236,13 +239,17 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
 def _repaired(ctx: PlanningContext, cand: Candidate | str, i: int,
               configs: list[Configuration], fid: list[Fidelity],
               pool: Sequence[Configuration], cache: dict[int, np.ndarray], stated: bool,
-              last_resort: bool = False) -> Candidate | str:
-    """``cand`` (configuration ``i``'s plan, or why it has none), or the plan of
-    configuration ``i`` repaired for reach (:func:`~llm_grop.planning.reach.repair`) when
-    that scores better or only it has a plan; ``configs[i]`` and ``fid[i]`` then become
-    the repaired configuration and its fidelity."""
+              last_resort: float = 0.0, base: Configuration | None = None,
+              base_fidelity: Fidelity | None = None) -> Candidate | str:
+    """``cand`` (the plan of ``configs[i]``, or why it has none), or the plan of ``base``
+    (default: ``configs[i]``) repaired for reach (:func:`~llm_grop.planning.reach.repair`;
+    ``last_resort`` passed on) when that scores better or only it has a plan;
+    ``configs[i]`` and ``fid[i]`` then become the repaired configuration and its
+    fidelity."""
     per_m = 100.0 * ctx.options.fidelity_w_s_per_cm
-    fixed = repair(ctx, configs[i], fid[i] if stated else None, pool, cache, last_resort)
+    start = configs[i] if base is None else base
+    start_fid = fid[i] if base_fidelity is None else base_fidelity
+    fixed = repair(ctx, start, start_fid if stated else None, pool, cache, last_resort)
     if fixed is None:
         return cand
     other = evaluate(ctx, fixed.configuration, i)

@@ -27,8 +27,9 @@ fidelity penalty), so nothing is repaired that GROP would not prefer:
 * **Last resort**: when no configuration has a plan even so (an object beyond the arm's
   reach of every free standing position in all M), a stated setting makes the shortest
   move, up to :data:`LAST_RESORT_SHIFT_M` in any direction (its edge distance too), that
-  brings every object within the arm's reach at all, rather than the episode failing;
-  the plan's fidelity reports what that cost.
+  brings every object within the arm's reach at all, or often enough
+  (:data:`LAST_RESORT_P`; GROP keeps the one that scores best), rather than the episode
+  failing; the plan's fidelity reports what that cost.
 * **No stated geometry** (random configurations, GROP's and the baselines'): the diner's
   objects are taken as they lie in another of the M configurations, the one whose
   farthest object is reached most surely, when they are clear of the other diners';
@@ -79,9 +80,11 @@ EDGE_TOLERANCE_M = 0.015
 #: The largest move, metres, when no configuration has a plan otherwise (a last resort,
 #: in any direction, away from the diner too).
 LAST_RESORT_SHIFT_M = 0.15
-#: A last resort's move is the shortest that lets every object be placed with at least
-#: this probability (that is, at all).
-REACHABLE_P = 1e-3
+#: The probabilities with which a last resort's moves (the shortest that let every
+#: object be placed at least that often) are tried; GROP keeps the one that scores best,
+#: so a longer move, farther from what was stated, is made only when its plan is worth
+#: the fidelity it costs.
+LAST_RESORT_P = (1e-3, 0.1, 0.25, 0.5)
 #: The step, metres, in which such a move is searched.
 STEP_M = 0.01
 #: Overlap, square metres, below which two footprints count as touching, not overlapping.
@@ -120,14 +123,15 @@ def best_place_p(ctx: PlanningContext, placements: Sequence[Placement]) -> Float
 
 def repair(ctx: PlanningContext, config: Configuration, fidelity: Fidelity | None,
            pool: Sequence[Configuration], cache: dict[int, Floats] | None = None,
-           last_resort: bool = False) -> Repaired | None:
+           last_resort: float = 0.0) -> Repaired | None:
     """``config`` with every diner whose objects are not all within sure reach repaired
     (see the module doc), or ``None`` when no diner needs or allows it. ``fidelity``:
     the configuration's measure (``None``: nothing was stated, and the diners' objects
     may be taken from the other configurations of ``pool``; ``cache`` keeps
-    :func:`best_place_p` per configuration of the pool, by index). ``last_resort``: a
-    stated setting may move up to :data:`LAST_RESORT_SHIFT_M` in any direction (for when
-    no configuration has a plan otherwise)."""
+    :func:`best_place_p` per configuration of the pool, by index). ``last_resort`` (a
+    probability; 0: none): a stated setting makes the shortest move, up to
+    :data:`LAST_RESORT_SHIFT_M` in any direction, with which every object is placed
+    with at least that probability (for when no configuration has a plan otherwise)."""
     placements = list(config.placements)
     if not placements or any(p.diner is None for p in placements):
         return None
@@ -227,15 +231,15 @@ def _offsets(place: Place, last_resort: bool = False) -> tuple[Floats, Floats, F
 
 def _shift(ctx: PlanningContext, group: Sequence[Placement], place: Place,
            top: BaseGeometry, others: Sequence[BaseGeometry], sure: float, now: float,
-           last_resort: bool = False, toward_m: float = MAX_SHIFT_M
+           last_resort: float = 0.0, toward_m: float = MAX_SHIFT_M
            ) -> tuple[list[Placement], float] | None:
     """``group`` moved whole, along its place's width or towards its diner (by at most
     ``toward_m``; with ``last_resort``, any way), by the
     shortest move (whole steps of :data:`STEP_M`, at most :data:`MAX_SHIFT_M`) that brings
     all of it within sure reach, else by the move that reaches its farthest object best;
     with the move's length, metres. ``None`` when no move gains."""
-    offsets, length, toward = _offsets(place, last_resort)
-    if not last_resort:
+    offsets, length, toward = _offsets(place, last_resort > 0)
+    if last_resort <= 0:
         keep = toward <= toward_m + 1e-9
         offsets, length = offsets[keep], length[keep]
     box = ctx.scene.target_table.box
@@ -256,9 +260,9 @@ def _shift(ctx: PlanningContext, group: Sequence[Placement], place: Place,
     low = p.max(axis=2).min(axis=1)                                   # (k,)
     # The shortest move that makes all of it sure (offsets are nearest first), else the
     # move that reaches its farthest object best; each tried only if it fits.
-    if last_resort:
-        # Not to be reached surely, only at all, by the shortest move that does it.
-        sure = min(sure, REACHABLE_P)
+    if last_resort > 0:
+        # Not to be reached surely, only as often as asked, by the shortest move.
+        sure = min(sure, last_resort)
     sure_k = [k for k in range(len(low)) if low[k] >= sure]
     rest = sorted((k for k in range(len(low)) if now + GAIN < low[k] < sure),
                   key=lambda k: (-low[k], length[k]))
