@@ -211,6 +211,8 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
             for p_min in LAST_RESORT_P:
                 cand = _repaired(ctx, cand, i, configs, fid, pool, cache, True, p_min,
                                  pool[i], fidelity[i])
+                if isinstance(cand, str):
+                    break  # what no move reaches at all, none reaches more often
             if not isinstance(cand, str):
                 cand = replace(cand, fidelity=fid[i],
                                score=cand.utility - per_m * fid[i].infidelity_m)

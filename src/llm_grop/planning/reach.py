@@ -87,6 +87,8 @@ LAST_RESORT_SHIFT_M = 0.15
 LAST_RESORT_P = (1e-3, 0.1, 0.25, 0.5)
 #: The step, metres, in which such a move is searched.
 STEP_M = 0.01
+#: The step, metres, of a last resort's moves (coarser: they range farther).
+LAST_RESORT_STEP_M = 0.025
 #: Overlap, square metres, below which two footprints count as touching, not overlapping.
 OVERLAP_M2 = 1e-7
 #: A repair must raise the farthest object's best place probability by more than this.
@@ -209,14 +211,15 @@ def _fits(group: Sequence[BaseGeometry], top: BaseGeometry,
 def _offsets(place: Place, last_resort: bool = False) -> tuple[Floats, Floats, Floats]:
     """The moves a stated setting may make, nearest first: in the place frame, whole
     steps of :data:`STEP_M` along its width and towards its diner (never away), within
-    :data:`MAX_SHIFT_M` (``last_resort``: every direction, within
-    :data:`LAST_RESORT_SHIFT_M`); as ``(k, 2)`` table-frame vectors, their lengths and
+    :data:`MAX_SHIFT_M` (``last_resort``: steps of :data:`LAST_RESORT_STEP_M` every way,
+    within :data:`LAST_RESORT_SHIFT_M`); as ``(k, 2)`` table-frame vectors, their lengths and
     how far each goes towards the diner, metres."""
-    limit = LAST_RESORT_SHIFT_M if last_resort else MAX_SHIFT_M
-    steps = int(round(limit / STEP_M))
+    limit, step = (LAST_RESORT_SHIFT_M, LAST_RESORT_STEP_M) if last_resort \
+        else (MAX_SHIFT_M, STEP_M)
+    steps = int(round(limit / step))
     u, v = np.meshgrid(np.arange(-steps, steps + 1),
                        np.arange(-steps if last_resort else 0, steps + 1))
-    u, v = STEP_M * u.ravel(), STEP_M * v.ravel()
+    u, v = step * u.ravel(), step * v.ravel()
     length = np.hypot(u, v)
     keep = (length > 0) & (length <= limit + 1e-9)
     u, v, length = u[keep], v[keep], length[keep]
@@ -234,10 +237,10 @@ def _shift(ctx: PlanningContext, group: Sequence[Placement], place: Place,
            last_resort: float = 0.0, toward_m: float = MAX_SHIFT_M
            ) -> tuple[list[Placement], float] | None:
     """``group`` moved whole, along its place's width or towards its diner (by at most
-    ``toward_m``; with ``last_resort``, any way), by the
-    shortest move (whole steps of :data:`STEP_M`, at most :data:`MAX_SHIFT_M`) that brings
-    all of it within sure reach, else by the move that reaches its farthest object best;
-    with the move's length, metres. ``None`` when no move gains."""
+    ``toward_m``), by the shortest move of :func:`_offsets` that brings all of it within
+    sure reach, else by the move that reaches its farthest object best; with the move's
+    length, metres. ``None`` when no move gains. ``last_resort`` (a probability): any
+    way, up to :data:`LAST_RESORT_SHIFT_M`, and placed that often counts as sure."""
     offsets, length, toward = _offsets(place, last_resort > 0)
     if last_resort <= 0:
         keep = toward <= toward_m + 1e-9
