@@ -28,6 +28,7 @@ from llm_grop.errors import Infeasible
 from llm_grop.geometry.motion import leg_duration_s
 from llm_grop.planning.feasibility import action_times, expected_failures, placing
 from llm_grop.planning.navigation import Navigator
+from llm_grop.planning.reach import LAST_RESORT_P, repair
 from llm_grop.planning.sequencing import best_order, refine, supports_before
 from llm_grop.planning.trips import handling_s, plan_trips
 from llm_grop.planning.utility import PlanningContext
@@ -179,8 +180,13 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
     reasons: list[str] = []
     found: list[Candidate] = []
     considered: list[Considered] = []
-    for i, config in enumerate(configs):
+    configs = list(configs)
+    cache: dict[int, np.ndarray] = {}
+    pool = tuple(configs)
+    for i, config in enumerate(pool):
         cand = evaluate(ctx, config, i, policy, rng)
+        if policy == "utility":
+            cand = _repaired(ctx, cand, i, configs, fid, pool, cache, bool(fidelity))
         if isinstance(cand, str):
             log.debug("configuration %d: no plan: %s", i + 1, cand)
             reasons.append(cand)
@@ -195,6 +201,23 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
                                      cand.score))
         if not best_of_all:
             break
+    if not found and policy == "utility" and fidelity:
+        # Nothing has a plan as sampled: a stated setting may move farther, any way.
+        for i in range(len(pool)):
+            cand = reasons[i]
+            for p_min in LAST_RESORT_P:
+                cand = _repaired(ctx, cand, i, configs, fid, pool, cache, True, p_min,
+                                 pool[i], fidelity[i])
+                if isinstance(cand, str):
+                    break  # what no move reaches at all, none reaches more often
+            if not isinstance(cand, str):
+                cand = replace(cand, fidelity=fid[i],
+                               score=cand.utility - per_m * fid[i].infidelity_m)
+                found.append(cand)
+                considered[i] = Considered(i, cand.utility, cand.feasibility, cand.cost_s,
+                                           fid[i], cand.score)
+                if not best_of_all:
+                    break
     if not found:
         raise Infeasible(f"no plan for any of {len(configs)} configuration(s): "
                          f"{max(set(reasons), key=reasons.count)}")
@@ -210,6 +233,34 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
         found = better + found
     best = max(found, key=lambda c: (c.score, c.utility, -c.index))
     return replace(best, considered=tuple(considered))
+
+
+def _repaired(ctx: PlanningContext, cand: Candidate | str, i: int,
+              configs: list[Configuration], fid: list[Fidelity],
+              pool: Sequence[Configuration], cache: dict[int, np.ndarray], stated: bool,
+              last_resort: float = 0.0, base: Configuration | None = None,
+              base_fidelity: Fidelity | None = None) -> Candidate | str:
+    """``cand`` (the plan of ``configs[i]``, or why it has none), or the plan of ``base``
+    (default: ``configs[i]``) repaired for reach (:func:`~llm_grop.planning.reach.repair`;
+    ``last_resort`` passed on) when that scores better or only it has a plan;
+    ``configs[i]`` and ``fid[i]`` then become the repaired configuration and its
+    fidelity."""
+    per_m = 100.0 * ctx.options.fidelity_w_s_per_cm
+    start = configs[i] if base is None else base
+    start_fid = fid[i] if base_fidelity is None else base_fidelity
+    fixed = repair(ctx, start, start_fid if stated else None, pool, cache, last_resort)
+    if fixed is None:
+        return cand
+    other = evaluate(ctx, fixed.configuration, i)
+    if isinstance(other, str):
+        return cand
+    if not isinstance(cand, str) and other.utility - per_m * fixed.fidelity.infidelity_m \
+            <= cand.utility - per_m * fid[i].infidelity_m:
+        return cand
+    log.debug("configuration %d: repaired for reach (moved %s m, taken from %s)", i + 1,
+              fixed.shifted_m, fixed.taken_from)
+    configs[i], fid[i] = fixed.configuration, fixed.fidelity
+    return other
 
 
 def build_plan(ctx: PlanningContext, cand: Candidate, navigator: Navigator, seed: int,
