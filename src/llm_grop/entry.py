@@ -73,10 +73,13 @@ def main() -> int:
 
 def _in_cleanup(frame: FrameType | None) -> bool:
     """Whether ``frame`` runs a finaliser or a weak reference's callback, where Python
-    prints an exception and carries on instead of raising it."""
+    prints an exception and carries on instead of raising it (the import system's
+    module-lock callback, ``_get_module_lock.<locals>.cb``, is one)."""
     while frame is not None:
-        if frame.f_code.co_name == "__del__" or frame.f_globals.get("__name__") in (
-                "weakref", "_weakrefset"):
+        module = frame.f_globals.get("__name__")
+        if frame.f_code.co_name == "__del__" or module in ("weakref", "_weakrefset") or (
+                module in ("_frozen_importlib", "importlib._bootstrap")
+                and frame.f_code.co_name == "cb"):
             return True
         frame = frame.f_back
     return False
