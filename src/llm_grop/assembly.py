@@ -246,7 +246,8 @@ def seat_diners(top: Table, s: RunSettings, where: str = "the table") -> Table:
     rectangle's long sides or round a circle
     (:func:`~llm_grop.geometry.places.default_seats`), so that a request for one setting
     is set once for each; ``top`` itself without ``diners`` or when it already seats that
-    many. Apply it after the record's ``table``.
+    many (one diner at a top without seats included). Apply it after the record's
+    ``table``.
 
     Raises :class:`~llm_grop.errors.BadInput` (``diners``) when ``top`` (at ``where``)
     seats another number.
@@ -254,8 +255,8 @@ def seat_diners(top: Table, s: RunSettings, where: str = "the table") -> Table:
     from llm_grop.errors import BadInput
     from llm_grop.geometry.places import default_seats
 
-    if s.diners is None or s.diners == len(top.diners):
-        return top
+    if s.diners is None or s.diners == len(top.diners) or (s.diners == 1 and not top.diners):
+        return top  # one diner without a seat is the paper's table, as without --diners
     if top.diners:
         raise BadInput(f"{s.diners} diners, but {where} seats {len(top.diners)}; give "
                        f"{len(top.diners)} or leave it out", param="diners")

@@ -298,6 +298,16 @@ def test_the_playgrounds_caption_says_where_the_diners_sit(server: Server, diner
     assert page.status_code == 200 and caption in page.text
 
 
+def test_a_plan_seats_the_diners_it_is_given(server: Server) -> None:
+    with server.client() as c:
+        r = c.post("/v1/plans", json={"task": 1, "seed": 2, "method": "grop", "diners": 3,
+                                      "table": {"size": [1.8, 0.9]}})
+        assert r.status_code == 200, r.text
+        plan = r.json()["plan"]
+    places = [s["object"] for s in plan["steps"] if s["action"] == "place"]
+    assert len(places) == 9 and "dinner plate 3" in places  # task 1's three, thrice
+
+
 @pytest.mark.parametrize("guess", ["on", "off"])
 def test_the_playground_offers_guess_as_its_own_control(server: Server, guess: str) -> None:
     form = {"request": "a dinner plate", "action": "arrange", "guess": guess}

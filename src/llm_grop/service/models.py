@@ -118,6 +118,7 @@ class PlanBody(_Body):
     arrangement: dict[str, Any] | None = Field(
         None, description="an arrangement JSON to plan for as it is, instead of a request")
     table: TableBody | None = Field(None, description="replaces the scene's target top")
+    diners: setting("diners", StrictInt) | None = described("diners")
     preferences: list[Sentence] = Field([], max_length=20)
     scene: dict[str, Any] | None = Field(
         None, description="the room as a scene document (the run JSON's scene; default: the "

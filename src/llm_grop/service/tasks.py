@@ -103,12 +103,8 @@ def _checked(options: type, given: Mapping[str, Any], owner: str, param: str) ->
 
 
 def _table(body: ArrangeBody) -> Table:
-    from llm_grop.geometry.places import default_seats
-
-    table = body.table.table() if body.table is not None else Table()
-    if body.diners is not None and body.diners > 1:
-        table = table.with_diners(default_seats(table, body.diners))
-    return table
+    # Its diners are seated by the settings record's ``diners``, as for the command line.
+    return body.table.table() if body.table is not None else Table()
 
 
 def _png(draw: Callable[[Path], object], scratch: Path) -> bytes:
