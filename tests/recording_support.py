@@ -71,3 +71,15 @@ class Recording:
 def entity(*parts: str) -> str:
     """The entity path Rerun stores for ``parts`` (a space escaped)."""
     return "/" + "/".join(p.replace(" ", "\\ ") for p in parts)
+
+
+def run_without_package(package: str, args: list[str]) -> subprocess.CompletedProcess[str]:
+    """``llm-grop ARGS`` in a fresh Python where importing ``package`` fails, as where its
+    optional extra is not installed."""
+    import sys
+
+    code = (f"import sys; sys.modules[{package!r}] = None; from llm_grop.cli import main; "
+            f"sys.exit(main({args!r}))")
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+

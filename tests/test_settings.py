@@ -174,3 +174,15 @@ def test_the_record_publishes_a_json_schema() -> None:
     assert schema["properties"]["m"]["door"] == {"cli": "--configurations", "short": "-m"}
     assert schema["properties"]["m"]["minimum"] == 1
     assert schema["additionalProperties"] is False
+
+
+def test_the_diners_setting_is_bounded_as_a_request_is() -> None:
+    # The settings record sits below world, so it spells the bound out; they must agree.
+    from annotated_types import Le
+
+    from llm_grop.settings import RunSettings
+    from llm_grop.world.request import MAX_DINERS
+
+    bounds = [m.le for m in RunSettings.model_fields["diners"].metadata if isinstance(m, Le)]
+    assert bounds == [MAX_DINERS]
+

@@ -13,7 +13,7 @@ import pytest
 
 from cli_support import one_line_error
 from llm_grop.cli import main
-from recording_support import REPLAY
+from recording_support import REPLAY, run_without_package
 
 pytest.importorskip("mcap_ros2")
 highlevel = pytest.importorskip("rosbags.highlevel")
@@ -124,14 +124,8 @@ def test_an_unwritable_bag_is_refused_before_any_work(tmp_path: Path, capsys, mo
 
 def test_without_the_extra_mcap_is_one_line(tmp_path: Path) -> None:
     # As where the [ros] extra is not installed: Python finds no mcap_ros2 package.
-    import subprocess
-    import sys
-
     args = ["run", "--task", "8", *REPLAY, "--mcap", str(tmp_path / "r.mcap")]
-    code = ("import sys; sys.modules['mcap_ros2'] = None; from llm_grop.cli import main; "
-            f"sys.exit(main({args!r}))")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120)
+    done = run_without_package("mcap_ros2", args)
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
     assert "--mcap: needs the optional [ros] extra" in done.stderr

@@ -18,7 +18,7 @@ import pytest
 from cli_support import one_line_error
 from llm_grop.cli import main
 from llm_grop.world.kind_colors import kind_color
-from recording_support import REPLAY, Recording, entity, verify
+from recording_support import REPLAY, Recording, entity, run_without_package, verify
 
 pytest.importorskip("rerun")
 
@@ -161,10 +161,7 @@ def test_an_unwritable_recording_is_refused_before_any_work(tmp_path: Path, caps
 def test_without_the_extra_rerun_is_one_line(tmp_path: Path) -> None:
     # As where the [viz] extra is not installed: Python finds no rerun package.
     args = ["run", "--task", "8", *REPLAY, "--rerun", str(tmp_path / "r.rrd")]
-    code = ("import sys; sys.modules['rerun'] = None; from llm_grop.cli import main; "
-            f"sys.exit(main({args!r}))")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120)
+    done = run_without_package("rerun", args)
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
     assert "--rerun: needs the optional [viz] extra" in done.stderr

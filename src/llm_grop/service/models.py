@@ -13,7 +13,7 @@ from llm_grop.contract.models import ArrangementDoc, RelationDoc, RunDoc
 from llm_grop.contract.plan_doc import PlanJSON
 from llm_grop.datafile import problem_line
 from llm_grop.settings import DEFAULTS, RunSettings, help_text
-from llm_grop.world.request import MAX_DINERS, MAX_REQUEST_CHARS
+from llm_grop.world.request import MAX_REQUEST_CHARS
 from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
 
 
@@ -86,7 +86,7 @@ class ArrangeBody(_Body):
 
     request: RequestText = Field(description="the request in the user's words")
     table: TableBody | None = Field(None, description="default: 0.9 x 0.6 m")
-    diners: Annotated[StrictInt, Field(ge=1, le=MAX_DINERS)] | None = Field(
+    diners: setting("diners", StrictInt) | None = Field(
         None, description="seat this many diners, one setting each (default: as the request "
                           "says)")
     preferences: list[Sentence] = Field([], max_length=20, description="relations the user "
