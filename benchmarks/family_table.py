@@ -2,8 +2,9 @@
 how long it takes, and why objects are not placed.
 
 Six diners, each with a dinner plate, a dinner fork, a dinner knife and a water cup (24
-objects), at a 2.4 x 1.0 m top in the packaged dining room, one run per seed and
-capacity, for
+objects), at a 2.4 x 1.0 m top in the packaged dining room (or ``--scene FILE``, such as
+``data/kitchen_apart.yaml``: the same room with its supplies in a kitchen next door), one
+run per seed and capacity, for
 
 * ``grop``: GROP (random arrangements; no LLM);
 * ``llm-grop``: LLM-GROP with the packaged preferences file (the relations and gaps it
@@ -22,6 +23,7 @@ The 2D ceiling: a failed place tips or drops its object (given up) 15 % of the t
 even from the best reach (a place succeeds 97 % of the time) each place is lost with
 probability about 0.45 %, and 24 objects all stay with probability about 0.90 at best.
 Run: .venv/bin/python benchmarks/family_table.py [--seeds 20] [--simulator kinematic2d|mujoco]
+     [--scene benchmarks/data/kitchen_apart.yaml]
      [--capacities 1,4] [--methods grop,llm-grop,embedded] [--jobs 2] [--quick]
 """
 
@@ -42,6 +44,7 @@ from llm_grop import BackendOptions, run
 from llm_grop.arrangement.pipeline import ArrangeOptions
 from llm_grop.arrangement.preferences import load_preference_file
 from llm_grop.errors import LLMGropError
+from llm_grop.files.scene_file import load_scene
 from llm_grop.world.table import Table
 
 DATA = Path(__file__).parent / "data"
@@ -54,13 +57,15 @@ METHODS = {"grop": "GROP (random arrangements, no LLM)",
 
 @dataclass(frozen=True)
 class Case:
-    """One run: method key, capacity (objects per trip), seed, simulator, table."""
+    """One run: method key, capacity (objects per trip), seed, simulator, table and scene
+    file (``None``: the packaged dining room)."""
 
     method: str
     capacity: int
     seed: int
     simulator: str
     table: str
+    scene: str | None = None
 
 
 @dataclass(frozen=True)
@@ -90,7 +95,8 @@ def one(case: Case) -> Outcome:
     try:
         r = run(REQUEST, table=Table.parse(case.table), seed=case.seed, method=method,
                 llm=llm, llm_options=llm_options, options=options, capacity=case.capacity,
-                simulator=case.simulator)
+                simulator=case.simulator,
+                scene=None if case.scene is None else load_scene(Path(case.scene)))
     except LLMGropError as exc:
         return Outcome(case, error=f"seed {case.seed}: {exc}")
     reach = []
@@ -142,6 +148,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--table", default="2.4x1.0")
+    ap.add_argument("--scene", default=None, help="a scene file (default: the packaged room)")
     ap.add_argument("--methods", default="grop,llm-grop",
                     help="comma-separated: " + ", ".join(METHODS))
     ap.add_argument("--capacities", default="1,4")
@@ -153,7 +160,8 @@ def main() -> None:
     if unknown:
         ap.error(f"--methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})")
     capacities = [int(c) for c in args.capacities.split(",")]
-    print(f"{REQUEST!r}, {args.table} m table, packaged room, {args.simulator}, "
+    room = "packaged room" if args.scene is None else args.scene
+    print(f"{REQUEST!r}, {args.table} m table, {room}, {args.simulator}, "
           f"seeds 0-{args.seeds - 1}")
     if args.simulator == "kinematic2d":
         print("ceiling: each place is lost (tipped or fell) with probability >= 0.45 %, so "
@@ -162,7 +170,7 @@ def main() -> None:
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         for method in wanted:
             for capacity in capacities:
-                cases = [Case(method, capacity, seed, args.simulator, args.table)
+                cases = [Case(method, capacity, seed, args.simulator, args.table, args.scene)
                          for seed in range(args.seeds)]
                 t0 = time.perf_counter()
                 outcomes = list(pool.map(one, cases))
