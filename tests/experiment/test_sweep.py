@@ -154,7 +154,8 @@ def test_two_sweeps_at_once_on_one_directory(tmp_path: Path, capsys) -> None:
     (SWEEP.replace("chairs: [0, 2]", "chairs: []"), "s.yaml: grid.chairs: must not be empty"),
     (SWEEP.replace("chairs: [0, 2]", "colour: [red]"),
      "s.yaml: grid.colour: unknown key; expected one of tasks, methods, trials, images, llm, "
-     "seed, method_options, task_files, catalog_files, scene, chairs, table, diners, capacity, m, "),
+     "seed, method_options, task_files, catalog_files, scene, chairs, table, diners, "
+     "capacity, m, "),
     (SWEEP.replace("trials: 2", "trials: 2\nchairs: 1"),
      "s.yaml: chairs: both in grid and at the top level; give it in one place"),
     (SWEEP.replace("backend: replay", "backend: replay, temprature: 0.5"),
