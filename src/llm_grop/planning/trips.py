@@ -92,7 +92,8 @@ def stand_distances(ctx: PlanningContext, stand: Sequence[int]) -> NDArray[np.fl
 
 def handling_s(ctx: PlanningContext) -> float:
     """Expected seconds an object adds on a trip of several under the planner's belief:
-    a place onto the tray and a pick from it at ``robot.reach_min_m``, each with its
+    a load onto the tray and an unload from it (the belief's ``load_s`` and ``unload_s``),
+    succeeding as a place and a pick at ``robot.reach_min_m``, each with its
     expected failed attempts (as :func:`~llm_grop.planning.grop.expected_duration_s`
     counts them)."""
     robot = ctx.scene.robot
@@ -100,7 +101,7 @@ def handling_s(ctx: PlanningContext) -> float:
     reach = np.array([robot.reach_min_m])
     p_load = float(placing(ctx.model, reach, robot)[0])
     p_unload = float(ctx.model.manipulation(reach, robot)[0])
-    return times.place_s + times.pick_s + times.failed_attempt_s * (
+    return times.load_s + times.unload_s + times.failed_attempt_s * (
         expected_failures(p_load) + expected_failures(p_unload))
 
 
