@@ -4,9 +4,10 @@ Given the standing positions (chosen as for capacity 1), the objects are ordered
 order cut into trips: on a trip the robot picks its objects up in order, then places them
 in order. A trip of one object rides in the hand, as with capacity 1; a trip of several
 rides on the robot's tray (:mod:`llm_grop.world.tray`), so its objects must fit the
-tray's slots together, and each of them costs one more place (onto the tray) and one
-more pick (off it) at the arm's sure reach (``robot.reach_min_m``), priced at the
-belief's chances and durations (:attr:`TripCosts.handling_s`). A trip is therefore only
+tray's slots together, and each of them costs a load onto the tray and an unload off
+it, which succeed as a place and a pick at the arm's sure reach (``robot.reach_min_m``)
+and take the belief's load and unload seconds (a place's and a pick's unless its
+profile states ``load_time_s`` / ``unload_time_s``) (:attr:`TripCosts.handling_s`). A trip is therefore only
 chosen where the drive it saves outweighs its loads and unloads.
 
 A trip's cost is its driving time (paths read from the cost-to-go fields, at the robot's
