@@ -7,8 +7,8 @@ rides on the robot's tray (:mod:`llm_grop.world.tray`), so its objects must fit 
 tray's slots together, and each of them costs a load onto the tray and an unload off
 it, which succeed as a place and a pick at the arm's sure reach (``robot.reach_min_m``)
 and take the belief's load and unload seconds (a place's and a pick's unless its
-profile states ``load_time_s`` / ``unload_time_s``) (:attr:`TripCosts.handling_s`). A trip is therefore only
-chosen where the drive it saves outweighs its loads and unloads.
+profile states ``load_time_s`` / ``unload_time_s``; :attr:`TripCosts.handling_s`). A
+trip is therefore only chosen where the drive it saves outweighs its loads and unloads.
 
 A trip's cost is its driving time (paths read from the cost-to-go fields, at the robot's
 speed) plus that handling. The cut of one order is exact dynamic programming:
