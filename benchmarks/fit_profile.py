@@ -77,6 +77,13 @@ def episode(job: tuple[str, int, int, str, str, str | None]) -> dict[str, Any] |
     targets = {p.name: scene.table_to_room(p.x, p.y) for p in r.plan.configuration}
     attempts = []
     for s in r.execution.steps:
+        if s.tray:
+            # A load onto the tray or an unload from it: timed, not part of the reach fit.
+            attempts.append({"action": "load" if s.action == "place" else "unload",
+                             "x": math.nan, "ok": s.ok, "attempt": s.attempt,
+                             "reason": s.reason, "duration_s": s.duration_s,
+                             "object": s.object, "arrival_m": None, "goal": None})
+            continue
         if s.action == "navigate" and s.goal is not None:
             x = float(obstacles.clearance([(s.goal.x, s.goal.y)])[0]) - robot.base_radius_m
         elif s.standing is not None and s.reason != "disturbed":
@@ -210,12 +217,24 @@ def fitted(rows: list[dict[str, Any]]) -> dict[str, float | None]:
     print("tipped after a place, by object: " + (", ".join(
         f"{k} {kinds[k]} of {placed[k]}" for k in sorted(placed)) or "none"))
     print(f"fit from {len(nav)} drives, {len(picks)} picks and {len(places)} places")
+    # Loads and unloads (runs with --capacity above 1): the median of every attempt,
+    # failed ones included, as benchmarks/tray_place_setting.py measures them.
+    tray_s = {k: [a["duration_s"] for a in attempts if a["action"] == k]
+              for k in ("load", "unload")}
+    for k, v in tray_s.items():
+        if v:
+            print(f"{k}s: n {len(v)}, median {statistics.median(v):.2f} s")
     return {"nav_max": model.nav_max, "nav_mid_m": model.nav_mid_m,
             "nav_scale_m": model.nav_scale_m, "manip_max": model.manip_max,
             "knee": model.knee, "reach_max_m": model.reach_max_m,
             "place_max": model.place_max,
             "pick_time_s": pick_mean, "place_time_s": place_mean, "leg_overhead_s": leg_s,
-            "failed_attempt_s": round(max(0.0, extra / failures), 2) if failures else 0.0}
+            "failed_attempt_s": round(max(0.0, extra / failures), 2) if failures else 0.0,
+            # None (no loads measured): --write keeps the profile's own.
+            "load_time_s": round(statistics.median(tray_s["load"]), 2)
+            if tray_s["load"] else None,
+            "unload_time_s": round(statistics.median(tray_s["unload"]), 2)
+            if tray_s["unload"] else None}
 
 
 def _as_planned(row: dict[str, Any]) -> list[tuple[dict[str, Any], Any]]:
@@ -252,10 +271,22 @@ def _top(observed: list[Sample], shape: ParametricFeasibility, robot: Robot, pla
 
 
 def write(profile: dict[str, float | None], description: str) -> None:
-    """Replace the ``mujoco`` profile in the packaged file, keeping everything else."""
+    """Replace the ``mujoco`` profile in the packaged file, keeping everything else and
+    the profile's own lines (with the comments above them) for keys the fit leaves
+    ``None`` (the loads' and unloads' seconds of runs without a tray)."""
     text = PROFILES.read_text(encoding="utf-8")
+    old = re.search(r"^mujoco:\n((?:  .*\n)*)", text, flags=re.M)
+    kept, comments = [], []
+    for line in (old.group(1).splitlines(keepends=True) if old else []):
+        if line.lstrip().startswith("#"):
+            comments.append(line)
+            continue
+        key = line.split(":")[0].strip()
+        if key in ("load_time_s", "unload_time_s") and profile.get(key) is None:
+            kept += comments + [line]
+        comments = []
     block = "mujoco:\n" + f"  description: {description}\n" + "".join(
-        f"  {k}: {v}\n" for k, v in profile.items() if v is not None)
+        f"  {k}: {v}\n" for k, v in profile.items() if v is not None) + "".join(kept)
     new, n = re.subn(r"^mujoco:\n(?:  .*\n)*", block, text, flags=re.M)
     if n != 1:
         raise SystemExit(f"{PROFILES}: no mujoco profile to replace")

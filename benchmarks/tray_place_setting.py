@@ -6,8 +6,8 @@
 for their loads) and ``quick`` (0.1 s picks and places, the default belief: the planner
 makes trips, as ``tests/simulation/test_tray.py`` runs it). Per run: each object's loads
 and unloads, succeeded / attempted, its fate, and whether all were placed; then the
-simulated seconds of each load and unload against the belief's ``times.place_s`` and
-``times.pick_s``, with which the planner prices them.
+simulated seconds of each load and unload against the belief's ``times.load_s`` and
+``times.unload_s``, with which the planner prices them.
 
     PYTHONPATH=src python benchmarks/tray_place_setting.py --seeds 6
 """
@@ -77,11 +77,11 @@ def main() -> None:
                 r = one(seed, SIMULATORS[sim], robot)
                 report(r, seed, sim, robot, durations)
                 times = action_times(feasibility_profile(r.feasibility), r.scene.robot)
-                belief[(sim, robot)] = (r.feasibility, times.place_s, times.pick_s)
-    print("\nsimulated seconds per tray step (ok or not) vs the belief's times.place_s "
-          "(load) / times.pick_s (unload)")
-    for (sim, robot), (profile, place_s, pick_s) in belief.items():
-        for kind, priced in (("load", place_s), ("unload", pick_s)):
+                belief[(sim, robot)] = (r.feasibility, times.load_s, times.unload_s)
+    print("\nsimulated seconds per tray step (ok or not) vs the belief's times.load_s "
+          "(load) / times.unload_s (unload)")
+    for (sim, robot), (profile, load_s, unload_s) in belief.items():
+        for kind, priced in (("load", load_s), ("unload", unload_s)):
             d = durations.get((sim, robot, kind), [])
             if not d:
                 print(f"{sim:6s} {robot:8s} {kind:6s}: none (belief {profile}: {priced:.2f} s)")

@@ -75,3 +75,37 @@ def test_2d_draws_its_durations_and_reach_from_its_truth() -> None:
         picks.append(s.pick("dinner plate"))
     assert all(step.reason != "no_ik" for step in picks)
     assert {step.duration_s for step in picks if step.ok} == {p.pick_time_s}
+
+
+def test_a_profile_s_load_and_unload_times_price_trips_and_the_2d_truth() -> None:
+    from dataclasses import replace
+
+    from llm_grop.planning.trips import handling_s
+    from llm_grop.world.robot import Robot
+
+    scene = replace(two_table_room(), robot=Robot(capacity=4))
+    items = items_from_names(["dinner plate", "dinner fork"], Catalog.load())
+    quiet = ParametricFeasibility(pick_time_s=5.0, place_time_s=6.0, manip_max=1.0 - 1e-12)
+    loads = replace(quiet, load_time_s=9.0, unload_time_s=8.0)
+    # Unstated: a load is a place and an unload a pick, as before.
+    assert quiet.action_times(scene.robot).load_s == 6.0
+    assert quiet.action_times(scene.robot).unload_s == 5.0
+    plain = handling_s(PlanningContext(scene, items, quiet))
+    priced = handling_s(PlanningContext(scene, items, loads))
+    assert plain == pytest.approx(11.0) and priced == pytest.approx(17.0)
+    # The 2D truth charges the profile's load and unload.
+    truth = ParametricOutcomes(pick_time_s=5.0, place_time_s=6.0, load_time_s=9.0,
+                               unload_time_s=8.0)
+    s = Kinematic2D(Kinematic2DOptions(outcomes=truth)).session(
+        scene, items, np.random.default_rng(0), replan=None)  # type: ignore[arg-type]
+    s.pose = Pose2D(1.0, 2.0, math.pi)  # facing the counter, in reach of both
+    pick = s.pick("dinner plate")
+    assert pick.ok and pick.duration_s == 5.0
+    load = s.load("dinner plate")
+    assert load.tray and load.duration_s == 9.0
+    if load.ok and s.objects()["dinner plate"].tray:
+        assert s.unload("dinner plate").duration_s == 8.0
+    # The fitted MuJoCo profile states them; the default one does not.
+    assert load_profile("mujoco").curves.load_time_s == 9.32
+    assert load_profile("mujoco").curves.unload_time_s == 8.96
+    assert load_profile("default").curves.load_time_s is None

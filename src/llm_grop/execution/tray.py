@@ -5,10 +5,11 @@ the tray, upright and on the tray itself (not on another object). Where on the t
 lies does not matter (it rides wherever it stands, and the arm unloads it from there). A
 load that fails before the hand lets go (``contact``) is tried again, once: the arm
 moves to the tray along the same way each time, so a third try would meet the same
-furniture. One the arm cannot reach (``no_ik``), or that left the object tipped, fallen or
-on another, gives the object up where it lies. An unload is a pick from the tray, tried
-within the object's attempts; an object no longer on the tray (it fell in transit) or
-lying on its side is given up.
+furniture (the MuJoCo session's load has by then tried every free slot that fits the
+object, each taking the elbow another way). One the arm cannot reach (``no_ik``), or
+that left the object tipped, fallen or on another, gives the object up where it lies.
+An unload is a pick from the tray, tried within the object's attempts; an object no
+longer on the tray (it fell in transit) or lying on its side is given up.
 """
 
 from __future__ import annotations

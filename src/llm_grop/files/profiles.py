@@ -48,6 +48,8 @@ class Curves:
             expected duration adds it for every expected retry.
         place_max: a place's ``manip_max`` (``None``: the same as a pick's; after release
             an object can still slide or tip).
+        load_time_s, unload_time_s: seconds of one attempt to put an object on the
+            robot's tray and to pick it from there (``None``: a place's and a pick's).
     """
 
     nav_max: float = 0.98
@@ -61,6 +63,20 @@ class Curves:
     leg_overhead_s: float = 0.0
     failed_attempt_s: float = 0.0
     place_max: float | None = None
+    load_time_s: float | None = None
+    unload_time_s: float | None = None
+
+    def action_time_s(self, action: str, robot: Robot) -> float:
+        """Seconds of one ``pick``, ``place``, ``load`` (onto the tray) or ``unload``
+        (from it) attempt: the profile's, else (a load) a place's and (an unload) a
+        pick's, else the robot's."""
+        own = {"pick": self.pick_time_s, "place": self.place_time_s,
+               "load": self.load_time_s, "unload": self.unload_time_s}[action]
+        if own is not None:
+            return float(own)
+        if action in ("load", "unload"):
+            return self.action_time_s("place" if action == "load" else "pick", robot)
+        return float(robot.pick_time_s if action == "pick" else robot.place_time_s)
 
     def navigation_p(self, clearance_m: ArrayLike) -> Floats:
         """Navigation's success probability at these clearances (metres)."""
@@ -106,6 +122,8 @@ class _ProfileModel(BaseModel):
     place_max: float | None = Field(None, gt=0, le=1)
     pick_time_s: float | None = Field(None, ge=0)
     place_time_s: float | None = Field(None, ge=0)
+    load_time_s: float | None = Field(None, ge=0)
+    unload_time_s: float | None = Field(None, ge=0)
     leg_overhead_s: float = Field(0.0, ge=0)
     failed_attempt_s: float = Field(0.0, ge=0)
 

@@ -78,9 +78,10 @@ class ParametricFeasibility(Curves):
 
     def action_times(self, robot: Robot) -> ActionTimes:
         """The profile's times, the robot's own where it states none."""
-        return ActionTimes(robot.pick_time_s if self.pick_time_s is None else self.pick_time_s,
-                           robot.place_time_s if self.place_time_s is None
-                           else self.place_time_s, self.leg_overhead_s, self.failed_attempt_s)
+        return ActionTimes(self.action_time_s("pick", robot),
+                           self.action_time_s("place", robot), self.leg_overhead_s,
+                           self.failed_attempt_s, self.action_time_s("load", robot),
+                           self.action_time_s("unload", robot))
 
 
 #: The model every planner and the simulator use unless given another.
@@ -90,12 +91,26 @@ DEFAULT_FEASIBILITY = ParametricFeasibility()
 @dataclass(frozen=True)
 class ActionTimes:
     """Expected seconds of the robot's actions under a belief: a successful pick and
-    place, a drive's overhead beyond its path and turns, and a failed attempt."""
+    place, a drive's overhead beyond its path and turns, a failed attempt, and a
+    successful load onto the tray and unload from it (``None``: a place's and a
+    pick's)."""
 
     pick_s: float
     place_s: float
     leg_overhead_s: float
     failed_attempt_s: float
+    stated_load_s: float | None = None
+    stated_unload_s: float | None = None
+
+    @property
+    def load_s(self) -> float:
+        """Seconds of a load onto the tray (a place's unless stated)."""
+        return self.place_s if self.stated_load_s is None else self.stated_load_s
+
+    @property
+    def unload_s(self) -> float:
+        """Seconds of an unload from the tray (a pick's unless stated)."""
+        return self.pick_s if self.stated_unload_s is None else self.stated_unload_s
 
 
 def action_times(model: FeasibilityModel, robot: Robot) -> ActionTimes:

@@ -4,10 +4,11 @@ Given the standing positions (chosen as for capacity 1), the objects are ordered
 order cut into trips: on a trip the robot picks its objects up in order, then places them
 in order. A trip of one object rides in the hand, as with capacity 1; a trip of several
 rides on the robot's tray (:mod:`llm_grop.world.tray`), so its objects must fit the
-tray's slots together, and each of them costs one more place (onto the tray) and one
-more pick (off it) at the arm's sure reach (``robot.reach_min_m``), priced at the
-belief's chances and durations (:attr:`TripCosts.handling_s`). A trip is therefore only
-chosen where the drive it saves outweighs its loads and unloads.
+tray's slots together, and each of them costs a load onto the tray and an unload off
+it, which succeed as a place and a pick at the arm's sure reach (``robot.reach_min_m``)
+and take the belief's load and unload seconds (a place's and a pick's unless its
+profile states ``load_time_s`` / ``unload_time_s``; :attr:`TripCosts.handling_s`). A
+trip is therefore only chosen where the drive it saves outweighs its loads and unloads.
 
 A trip's cost is its driving time (paths read from the cost-to-go fields, at the robot's
 speed) plus that handling. The cut of one order is exact dynamic programming:
@@ -92,7 +93,8 @@ def stand_distances(ctx: PlanningContext, stand: Sequence[int]) -> NDArray[np.fl
 
 def handling_s(ctx: PlanningContext) -> float:
     """Expected seconds an object adds on a trip of several under the planner's belief:
-    a place onto the tray and a pick from it at ``robot.reach_min_m``, each with its
+    a load onto the tray and an unload from it (the belief's ``load_s`` and ``unload_s``),
+    succeeding as a place and a pick at ``robot.reach_min_m``, each with its
     expected failed attempts (as :func:`~llm_grop.planning.grop.expected_duration_s`
     counts them)."""
     robot = ctx.scene.robot
@@ -100,7 +102,7 @@ def handling_s(ctx: PlanningContext) -> float:
     reach = np.array([robot.reach_min_m])
     p_load = float(placing(ctx.model, reach, robot)[0])
     p_unload = float(ctx.model.manipulation(reach, robot)[0])
-    return times.place_s + times.pick_s + times.failed_attempt_s * (
+    return times.load_s + times.unload_s + times.failed_attempt_s * (
         expected_failures(p_load) + expected_failures(p_unload))
 
 

@@ -17,7 +17,9 @@ as a black box, as in the paper). It offers primitives only; the executive
 * **The tray** (:mod:`llm_grop.world.tray`, the 3D robot's): loading puts the held
   object in a free slot that fits it, unloading takes it back into the hand. They are a
   place and a pick at the arm's sure reach (the robot's ``reach_min_m``: the tray lies
-  on the base), with a place's and a pick's durations and true chances; a failed load
+  on the base), with a place's and a pick's true chances and the truth's load and
+  unload durations (``load_time_s``, ``unload_time_s``; unstated: a place's and a
+  pick's); a failed load
   goes as a failed place does (``contact``: still in the hand; ``slid``: elsewhere on the
   tray, which carries it as well; ``tipped``: on its side on the tray; ``fell``: to the
   floor). What rides on the tray moves with the base.
@@ -326,7 +328,8 @@ class Kinematic2DSession:
         return self._step(ExecutedStep("place", True, seconds, name, standing=standing))
 
     def _seconds(self, action: str) -> float:
-        """How long a pick or place attempt takes (the truth's declaration)."""
+        """How long a pick, place, load or unload attempt takes (the truth's
+        declaration)."""
         return self.truth.attempt_time_s(action, self.robot)
 
     def _land(self, name: str, x: float, y: float, yaw: float, on: str | None,
@@ -384,7 +387,7 @@ class Kinematic2DSession:
                                 tray=True)
         k = slots[0]
         yaw = self.tray.slots[k].yaw(*self.footprints[name]) or 0.0
-        standing, seconds = self.pose, self._seconds("place")
+        standing, seconds = self.pose, self._seconds("load")
         if self.rng.random() >= self.truth.placing(self.robot.reach_min_m, self.robot):
             reasons = [r for r, _ in self.o.place_failures]
             weights = np.array([w for _, w in self.o.place_failures], dtype=float)
@@ -412,7 +415,7 @@ class Kinematic2DSession:
                 else "the hand is full"
             return ExecutedStep("pick", False, 0.0, name, note=f"unload refused: {why}",
                                 tray=True)
-        standing, seconds = self.pose, self._seconds("pick")
+        standing, seconds = self.pose, self._seconds("unload")
         tipped = self.on_tray[name][2] > TIPPED_RAD / 2
         p = 0.0 if tipped else self.truth.manipulation(self.robot.reach_min_m, self.robot)
         if self.rng.random() < p:

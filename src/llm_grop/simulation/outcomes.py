@@ -49,7 +49,8 @@ class Outcomes(Protocol):
         ...
 
     def attempt_time_s(self, action: str, robot: Robot) -> float:
-        """Seconds one ``pick`` or ``place`` attempt takes, whether it succeeds or not."""
+        """Seconds one ``pick``, ``place``, ``load`` (onto the tray) or ``unload`` (from
+        it) attempt takes, whether it succeeds or not."""
         ...
 
 
@@ -73,8 +74,9 @@ class BaseOutcomes:
         return robot.reach_max_m
 
     def attempt_time_s(self, action: str, robot: Robot) -> float:
-        """The robot's own seconds for ``action``."""
-        return robot.pick_time_s if action == "pick" else robot.place_time_s
+        """The robot's own seconds for ``action`` (a load takes a place's, an unload a
+        pick's)."""
+        return robot.pick_time_s if action in ("pick", "unload") else robot.place_time_s
 
 
 @dataclass(frozen=True)
@@ -82,7 +84,9 @@ class ParametricOutcomes(Curves):
     """The parametric truth described in the module docstring, one action at a time; its
     numbers (:class:`~llm_grop.files.profiles.Curves`) include how long actions take: a
     pick or place attempt takes ``pick_time_s`` or ``place_time_s`` (``None``: the
-    robot's) whether it succeeds or not, and ``leg_overhead_s`` is added to every drive.
+    robot's) whether it succeeds or not, a load onto the tray or an unload from it
+    ``load_time_s`` or ``unload_time_s`` (``None``: a place's or a pick's), and
+    ``leg_overhead_s`` is added to every drive.
     (``failed_attempt_s``, what the planner expects a failure to cost with its recovery,
     is the 2D simulator's to produce, not to draw.)
     """
@@ -108,7 +112,5 @@ class ParametricOutcomes(Curves):
         return self.reach_max_m or robot.reach_max_m
 
     def attempt_time_s(self, action: str, robot: Robot) -> float:
-        """The profile's seconds for ``action``, else the robot's."""
-        own = self.pick_time_s if action == "pick" else self.place_time_s
-        mine = robot.pick_time_s if action == "pick" else robot.place_time_s
-        return float(own if own is not None else mine)
+        """The profile's seconds for ``action`` (:meth:`Curves.action_time_s`)."""
+        return self.action_time_s(action, robot)

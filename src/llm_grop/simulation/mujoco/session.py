@@ -237,7 +237,12 @@ class MujocoSession:
     def load(self, name: str) -> ExecutedStep:
         """One attempt to put the held ``name`` on the tray, in the smallest free slot
         that fits it, turned as the slot wants it (a round object: whichever way the arm
-        reaches), release it and let it settle."""
+        reaches), release it and let it settle. When the arm touches something on the way
+        (``contact``, before letting go, the object still in the hand) or cannot reach
+        the slot (``no_ik``), the other free slots that fit it are tried, smallest first:
+        they take the elbow to other sides of the base (a wall beside the robot blocks
+        the left-hand slots, not the others). All of them failing is a ``contact`` if
+        any one's was."""
         taken = self._taken([name])
         slots = self.tray.assign([self._footprint(name)], taken) \
             if name in self.w.wm.objects else None
@@ -246,19 +251,47 @@ class MujocoSession:
                 else "no free slot on the tray fits it"
             return ExecutedStep("place", False, 0.0, name, note=f"load refused: {why}",
                                 tray=True)
-        k = slots[0]
-        slot, b = self.tray.slots[k], self.w.base_pose()
+        shape, size = self._footprint(name)
+        others = [k for k in sorted(range(len(self.tray.slots)),
+                                    key=lambda k: self.tray.slots[k].area_m2)
+                  if k != slots[0] and k not in taken
+                  and self.tray.slots[k].yaw(shape, size) is not None]
+        b, missed = self.w.base_pose(), []
+        for k in (slots[0], *others):
+            self.slots[name] = k
+            result = self._load_into(name, k, b)
+            if result.ok or result.reason not in ("contact", "no_ik") or self.w.held != name:
+                break
+            missed.append((k, result))
+        if result.ok:
+            note = "loaded into slot {} after {}".format(
+                k, "; ".join(f"slot {j}: {a.note}" for j, a in missed)) if missed else ""
+        elif len(missed) > 1 and missed[-1][1] is result:
+            # Every slot that fits failed before the hand let go: a contact if any slot's
+            # did (the hand still holds it, a retry may pass), else out of reach.
+            reasons = {a.reason for _, a in missed}
+            result = replace(result, reason="contact" if "contact" in reasons else "no_ik")
+            note = "load failed: " + "; ".join(f"slot {j}: {a.note}" for j, a in missed)
+        else:
+            note = f"load failed: {result.note}"
+        return self._step(ExecutedStep(
+            "place", result.ok, 0.0, name, standing=b, reason=result.reason, tray=True,
+            note=note))
+
+    def _load_into(self, name: str, k: int, b: Pose2D) -> manipulation.Attempt:
+        """One try to put the held ``name`` in the tray's slot ``k``, the base at ``b``."""
+        slot = self.tray.slots[k]
         c, s = math.cos(b.theta), math.sin(b.theta)
         x, y = b.x + c * slot.x - s * slot.y, b.y + s * slot.x + c * slot.y
         shape, size = self._footprint(name)
         along = b.theta + (slot.yaw(shape, size) or 0.0)
-        turns = (0.0, math.pi) if shape != "circle" else \
+        # A long object in a slot it fits either way (the large, square one) may also
+        # lie across it, should the arm reach neither way along.
+        across = shape != "circle" and max(size) / 2 <= min(slot.half_x, slot.half_y) + 1e-9
+        turns = (0.0, math.pi, math.pi / 2, -math.pi / 2) if across else \
+            (0.0, math.pi) if shape != "circle" else \
             tuple(math.pi * j / 4 for j in (0, 4, 2, -2, 1, -1, 3, -3))
-        self.slots[name] = k
-        result = manipulation.load(self.w, name, x, y, [along + t for t in turns])
-        return self._step(ExecutedStep(
-            "place", result.ok, 0.0, name, standing=b, reason=result.reason, tray=True,
-            note="" if result.ok else f"load failed: {result.note}"))
+        return manipulation.load(self.w, name, x, y, [along + t for t in turns])
 
     def unload(self, name: str) -> ExecutedStep:
         """One attempt to pick ``name`` from the tray."""
