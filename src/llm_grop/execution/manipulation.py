@@ -15,7 +15,7 @@ from dataclasses import replace
 from typing import Protocol
 
 from llm_grop.execution.judge import clear_of, judged_place, table_pose
-from llm_grop.execution.tray import Attempts
+from llm_grop.execution.tray import Attempts, take
 from llm_grop.world.arrangement import Placement
 from llm_grop.world.plan import ObjectState, Reason
 from llm_grop.world.scene import Scene
@@ -52,27 +52,10 @@ class Hands(Attempts, Protocol):
 
 def pick(ex: Hands, name: str) -> Reason | None:
     """Pick ``name`` from where it lies, within its pick attempts: ``None`` when it is
-    in the hand, else why not (one that tipped or fell is not tried again)."""
-    why: Reason = "grasp_missed"
-    while ex._left(name, "pick") > 0:
-        state = ex.s.objects()[name]
-        if state.table is None:
-            return "fell"
-        if state.tilt_rad > ex.policy.max_tilt_rad:
-            return "tipped"
-        attempt = ex._use(name, "pick")
-        done = ex.s.pick(name)
-        ex.record(replace(done, object=name, attempt=attempt))
-        ex.check_placed(name)
-        if done.ok:
-            return None
-        if done.reason is None:
-            raise RuntimeError(f"the simulator refused to pick {name!r}: {done.note}")
-        why = done.reason
-        if done.reason == "no_ik" and ex._left(name, "pick") > 0 \
-                and not ex.next_stand(name):
-            break
-    return why
+    in the hand, else why not (one that tipped or fell is not tried again; one out of
+    reach is tried from the leg's next standing position)."""
+    return take(ex, name, ex.s.pick, lambda state: state.table is None,
+                lambda: ex._left(name, "pick") > 0 and ex.next_stand(name))
 
 
 def place(ex: Hands, name: str) -> bool:

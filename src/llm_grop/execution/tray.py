@@ -14,6 +14,7 @@ longer on the tray (it fell in transit) or lying on its side is given up.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Protocol
 
@@ -97,25 +98,35 @@ def load(ex: Attempts, name: str) -> Reason | None:
     return why
 
 
-def unload(ex: Attempts, name: str) -> Reason | None:
-    """Pick ``name`` from the tray, within its pick attempts: ``None`` when it is in
-    the hand, else why not."""
+def take(ex: Attempts, name: str, grasp: Callable[[str], ExecutedStep],
+         lost: Callable[[ObjectState], bool], elsewhere: Callable[[], bool]) -> Reason | None:
+    """Grasp ``name`` with ``grasp`` (a pick from where it lies, an unload from the tray)
+    within its pick attempts: ``None`` when it is in the hand, else why not. An object
+    that is ``lost`` (no longer where it should lie) fell, one on its side tipped; after
+    an attempt the arm could not reach, it goes on only when ``elsewhere()`` moved the
+    robot to somewhere else to try from."""
     why: Reason = "grasp_missed"
     while ex._left(name, "pick") > 0:
         state = ex.s.objects()[name]
-        if not state.tray:
+        if lost(state):
             return "fell"
         if state.tilt_rad > ex.policy.max_tilt_rad:
             return "tipped"
         attempt = ex._use(name, "pick")
-        done = ex.s.unload(name)
+        done = grasp(name)
         ex.record(replace(done, object=name, attempt=attempt))
         ex.check_placed(name)
         if done.ok:
             return None
         if done.reason is None:
-            raise RuntimeError(f"the simulator refused to unload {name!r}: {done.note}")
+            raise RuntimeError(f"the simulator refused to grasp {name!r}: {done.note}")
         why = done.reason
-        if why == "no_ik":
+        if why == "no_ik" and not elsewhere():
             return why
     return why
+
+
+def unload(ex: Attempts, name: str) -> Reason | None:
+    """Pick ``name`` from the tray, within its pick attempts: ``None`` when it is in
+    the hand, else why not."""
+    return take(ex, name, ex.s.unload, lambda state: not state.tray, lambda: False)
