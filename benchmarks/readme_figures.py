@@ -29,10 +29,10 @@ import json
 import subprocess
 import sys
 import time
-from importlib import metadata
 from pathlib import Path
 
 from common import RECORDING, parse_args, scratch
+from figure_versions import project_version
 
 HERE = Path(__file__).parent
 PREFERENCES = HERE / "data" / "preferences.yaml"
@@ -102,7 +102,9 @@ def main() -> None:
     summaries, walls = {}, {}
     for name in names:
         summaries[name], walls[name] = bench(name, args.out, args.workers, args.quick)
-    print(f"\nllm-grop {metadata.version('llm-grop')}; LLM: the embedded model's answers "
+    # The checkout's version: an editable install's metadata keeps the version it was
+    # installed with.
+    print(f"\nllm-grop {project_version()}; LLM: the embedded model's answers "
           f"(SmolLM2-135M-Instruct) replayed from {RECORDING.relative_to(HERE.parent)}; "
           f"ratings from the automatic rater")
     for name in names:
