@@ -160,6 +160,11 @@ def main() -> None:
     if unknown:
         ap.error(f"--methods: unknown {', '.join(unknown)} (known: {', '.join(METHODS)})")
     capacities = [int(c) for c in args.capacities.split(",")]
+    if args.scene is not None:
+        try:  # before any run: a bad scene is one line, not one line per seed
+            load_scene(Path(args.scene))
+        except LLMGropError as exc:
+            ap.error(f"--scene: {exc}")
     room = "packaged room" if args.scene is None else args.scene
     print(f"{REQUEST!r}, {args.table} m table, {room}, {args.simulator}, "
           f"seeds 0-{args.seeds - 1}")

@@ -67,10 +67,6 @@ def _stated(config: Configuration, edge_m: float = 0.03) -> Fidelity:
                     edge_realised_m=edge_m)
 
 
-def test_the_planner_keeps_the_sampler_s_tolerance() -> None:
-    assert reach.EDGE_TOLERANCE_M == GAP_TOLERANCE_M
-
-
 def test_sure_reach_is_just_past_the_knee_of_the_default_belief() -> None:
     ctx = _ctx()
     r = np.linspace(0.3, 0.85, 1101)

@@ -19,13 +19,10 @@ from numpy.typing import ArrayLike, NDArray
 from llm_grop.arrangement.layout import GuidedLayout, Key
 from llm_grop.arrangement.predicates import Footprint
 from llm_grop.world.arrangement import Configuration
+from llm_grop.world.fidelity import GAP_TOLERANCE_M as GAP_TOLERANCE_M
 from llm_grop.world.fidelity import Fidelity, GapFidelity
 from llm_grop.world.relation import CENTER, DIRECTION, STACKING, Relation
 from llm_grop.world.table import Table
-
-#: A stated gap (or distance from the diner) is kept when the configuration realises it
-#: within this many metres either way.
-GAP_TOLERANCE_M = 0.015
 
 Floats = NDArray[np.float64]
 

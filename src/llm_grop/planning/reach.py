@@ -59,7 +59,7 @@ from llm_grop.geometry.places import Place, outline, places
 from llm_grop.planning.feasibility import placing
 from llm_grop.planning.utility import PlanningContext
 from llm_grop.world.arrangement import Configuration, Placement
-from llm_grop.world.fidelity import Fidelity
+from llm_grop.world.fidelity import GAP_TOLERANCE_M, Fidelity
 from llm_grop.world.table import Table
 
 Floats = NDArray[np.float64]
@@ -73,10 +73,8 @@ SURE = 0.995
 #: The largest move, metres, of a setting with stated geometry.
 MAX_SHIFT_M = 0.05
 #: How far short of its stated distance from the diner's edge a setting may come by a
-#: move, metres: the sampler's tolerance of a stated gap
-#: (:data:`llm_grop.arrangement.fidelity.GAP_TOLERANCE_M`, which the planner may not
-#: import; a test keeps the two equal).
-EDGE_TOLERANCE_M = 0.015
+#: move, metres: the sampler's tolerance of a stated gap.
+EDGE_TOLERANCE_M = GAP_TOLERANCE_M
 #: The largest move, metres, when no configuration has a plan otherwise (a last resort,
 #: in any direction, away from the diner too).
 LAST_RESORT_SHIFT_M = 0.15

@@ -7,6 +7,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+#: A stated gap (or distance from the diner) is kept when a configuration realises it
+#: within this many metres either way: what the sampler allows and what the planner may
+#: give up when it moves a setting within the arm's reach.
+GAP_TOLERANCE_M = 0.015
+
 
 @dataclass(frozen=True)
 class GapFidelity:
