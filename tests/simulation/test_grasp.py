@@ -39,6 +39,28 @@ def test_pads_that_squeeze_attach_and_carry_it() -> None:
     assert s.objects()["mug"].z > 0.9  # lifted to the carry posture, above the table
 
 
+def test_taking_the_bottom_plate_of_a_pile_takes_the_top_one() -> None:
+    # The plates of a pile are alike, so the plan may name any of them: the arm takes the
+    # top one, as in the 2D simulator, and what stays is a pile of two.
+    names = ["dinner plate", "dinner plate 2", "dinner plate 3"]
+    scene = room(tuple(ObjectSource(n, "dining table", 3.0, 1.85, below)
+                       for n, below in zip(names, [None, *names], strict=False)),
+                 Pose2D(3.0, 1.3, math.pi / 2))
+    s = MujocoSimulator().session(scene, items_from_names(["dinner plate"] * 3, Catalog.load()),
+                                  np.random.default_rng(0),
+                                  replan=Navigator(scene, scene.robot.base_radius_m))
+    before = s.objects()
+    step = s.pick("dinner plate")
+    assert step.ok, step.note
+    after = s.objects()
+    assert after["dinner plate"].held
+    # The top plate's place and the bottom one's were swapped before the grasp.
+    assert (after["dinner plate 3"].on, after["dinner plate 3"].z) == (
+        None, pytest.approx(before["dinner plate"].z, abs=0.005))
+    assert (after["dinner plate 2"].on, after["dinner plate 2"].z) == (
+        "dinner plate 3", pytest.approx(before["dinner plate 2"].z, abs=0.005))
+
+
 def test_pads_that_touch_without_squeezing_do_not_attach() -> None:
     s = _session("mug")
     # Fingers too weak to press: they close onto the mug and touch it with under 1 N.

@@ -35,6 +35,11 @@ from llm_grop.world.scene import ObjectSource, Scene, SceneTable
 OBJECT_RADIUS_M = 0.06
 #: Gap kept between two waiting objects' discs, metres.
 OBJECT_GAP_M = 0.01
+#: Gap kept between two waiting objects' footprints on a crowded table (see
+#: ``_swept_spot``), metres: room for a finger of the open gripper beside an object it
+#: grasps (the pads open 1.5 cm past the object, and a finger with its pad is 2 cm thick),
+#: with 5 mm to spare.
+FINGER_ROOM_M = 0.04
 #: Clearance between a waiting object's disc and its table's edge, metres.
 EDGE_MARGIN_M = 0.05
 #: Waiting objects lie at most this far, metres, from a table edge the robot can stand at,
@@ -171,7 +176,7 @@ class Supply:
 
         When random draws find no room, the table is swept for the first spot where the
         object's footprint (half sides ``half``, unturned in the room) keeps
-        :data:`OBJECT_GAP_M` from every waiting footprint: a fork stood across a counter's
+        :data:`FINGER_ROOM_M` from every waiting footprint: a fork stood across a counter's
         edge takes a few centimetres of it, not the disc round it."""
         box = table.box
         inset = EDGE_MARGIN_M + radius
@@ -227,8 +232,8 @@ class Supply:
                     u = du * (bw - d) if du else float(t)
                     v = dv * (bd - d) if dv else float(t)
                     x, y = (rounded(c) for c in box.to_room(u, v))
-                    if all(abs(x - tx) >= half[0] + hx + OBJECT_GAP_M
-                           or abs(y - ty) >= half[1] + hy + OBJECT_GAP_M
+                    if all(abs(x - tx) >= half[0] + hx + FINGER_ROOM_M
+                           or abs(y - ty) >= half[1] + hy + FINGER_ROOM_M
                            for tx, ty, _, hx, hy in self.taken):
                         found = self.approach(table.name, x, y)
                         if found is not None:

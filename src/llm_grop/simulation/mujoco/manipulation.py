@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -74,6 +74,7 @@ def pick(w: World, name: str, *, from_tray: bool = False) -> Attempt:
     four grasps nearest the base are tried; ``from_tray``, every grasp, farthest first
     (on the base's own tray the arm reaches out, not in at its column)."""
     t0 = w.d.time
+    _uncover(w, name)
     item = w.wm.objects[name]
     pose = w.object_pose(name)
     base = w.base_pose()
@@ -120,6 +121,35 @@ def pick(w: World, name: str, *, from_tray: bool = False) -> Attempt:
         return _abort(w, t0, "it slipped from the pads while lifting", "grasp_missed",
                       via=via)
     return Attempt(True, w.d.time - t0)
+
+
+def _uncover(w: World, name: str) -> None:
+    """Bring ``name`` to the top of the pile it lies in. A pile's objects are identical,
+    so taking one from under the others stands for taking the top one, as in the 2D
+    simulator: the arm gets the same object either way. The top one and ``name`` swap
+    places (their free joints' positions and velocities), which changes nothing physical.
+    Something else on ``name`` (another kind) stays, and the pick finds ``name`` covered."""
+    top = name
+    while True:
+        above = next((o for o in w.wm.objects
+                      if o not in (top, w.held) and w.support_of(o) == top), None)
+        if above is None or replace(w.wm.objects[above], name=name) != w.wm.objects[name]:
+            break
+        top = above
+    if top == name:
+        return
+    (qa, va), (qb, vb) = _free_joint(w, name), _free_joint(w, top)
+    w.d.qpos[qa:qa + 7], w.d.qpos[qb:qb + 7] = w.d.qpos[qb:qb + 7].copy(), \
+        w.d.qpos[qa:qa + 7].copy()
+    w.d.qvel[va:va + 6], w.d.qvel[vb:vb + 6] = w.d.qvel[vb:vb + 6].copy(), \
+        w.d.qvel[va:va + 6].copy()
+    mujoco.mj_forward(w.m, w.d)
+
+
+def _free_joint(w: World, name: str) -> tuple[int, int]:
+    """Where tableware ``name``'s free joint starts in ``qpos`` and in ``qvel``."""
+    j = int(w.m.body(name).jntadr[0])
+    return int(w.m.jnt_qposadr[j]), int(w.m.jnt_dofadr[j])
 
 
 def place(w: World, name: str, x: float, y: float, yaw: float, support: str) -> Attempt:
