@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.geometry2d import Pose2D
 from llm_grop.world.request import items_from_names
 from llm_grop.world.scene import ObjectSource
+from scenes import two_table_room
 
 
 def _session(name: str, options: MujocoOptions | None = None) -> MujocoSession:
@@ -59,6 +61,23 @@ def test_taking_the_bottom_plate_of_a_pile_takes_the_top_one() -> None:
         None, pytest.approx(before["dinner plate"].z, abs=0.005))
     assert (after["dinner plate 2"].on, after["dinner plate 2"].z) == (
         "dinner plate 3", pytest.approx(before["dinner plate 2"].z, abs=0.005))
+
+
+def test_the_top_of_a_pile_of_six_plates_on_a_high_counter_is_picked() -> None:
+    # Its rim is 1.04 m up: the arm cannot hold the hand a full approach (0.10 m) above
+    # it, so it comes down from 0.05 m.
+    names = ["dinner plate", *(f"dinner plate {k}" for k in range(2, 7))]
+    scene = two_table_room(sources=tuple(
+        ObjectSource(n, "counter", 0.45, 2.1, below)
+        for n, below in zip(names, [None, *names], strict=False)))
+    scene = replace(scene, tables=tuple(replace(t, height=0.9) if t.name == "counter" else t
+                                        for t in scene.tables))
+    s = MujocoSimulator().session(scene, items_from_names(["dinner plate"] * 6, Catalog.load()),
+                                  np.random.default_rng(0),
+                                  replan=Navigator(scene, scene.robot.base_radius_m))
+    assert s.navigate(Pose2D(1.12, 2.1, math.pi)).ok
+    step = s.pick("dinner plate 6")
+    assert step.ok, step.note
 
 
 def test_pads_that_touch_without_squeezing_do_not_attach() -> None:

@@ -34,6 +34,9 @@ from llm_grop.world.plan import Reason
 
 #: Height of the pre-grasp and pre-place poses above the grasp (metres).
 APPROACH_M = 0.10
+#: Height of the pre-grasp pose when the arm cannot reach :data:`APPROACH_M` above an
+#: object it can grasp (the top of a tall pile on a high counter), metres.
+LOW_APPROACH_M = 0.05
 #: An object is released this high above its surface (metres).
 DROP_M = 0.006
 #: The grasp attaches when each pad presses with at least this force, newtons, ...
@@ -91,6 +94,8 @@ def pick(w: World, name: str, *, from_tray: bool = False) -> Attempt:
         target = _to_base(w, x, y, z)
         at = w.ik.solve(target, yaw, w.arm_q())
         above = w.ik.solve((target[0], target[1], z + APPROACH_M), yaw, at.q)
+        if at.ok and not above.ok and not from_tray:
+            above = w.ik.solve((target[0], target[1], z + LOW_APPROACH_M), yaw, at.q)
         # From the tray the arm swings round high over it, not through the table ahead.
         via = _over(w, target, yaw, above.q) if from_tray and above.ok else None
         if at.ok and above.ok and (via is not None or not from_tray):
