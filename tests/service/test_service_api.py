@@ -126,8 +126,8 @@ BAD = [
     ("/v1/plans", {"task": 8, "scene": {"room": {"width": 5}}}, 422, "scene: "),
     ("/v1/plans", {"request": "twelve water cups, twelve wine glasses and six napkins",
                    "method": "grop"}, 409,
-     "the supply tables hold 27 of the 30 objects: 'napkin 4', 'napkin 5', 'napkin 6' do "
-     "not fit"),
+     "the supply tables hold 26 of the 30 objects: 'napkin 3', 'napkin 4', 'napkin 5', "
+     "'napkin 6' do not fit"),
     ("/v1/plans", {"task": 8, "scene": {"room": {"width": 5, "depth": 5}, "target": "t",
                                         "tables": [{"name": "t", "center": [1, 1],
                                                     "size": [0.5, 0.5]}] * 101}}, 422,
