@@ -18,6 +18,7 @@ time (simulated seconds) and the plan's expected duration, the median trips, the
 attempts by action and reason, the unplaced objects by reason, the reach (metres, base
 centre to target) of the places as planned and the planning time (median, p95). Runs are
 spread over ``--jobs`` processes; every run is seeded, so the figures do not depend on it.
+The planner's belief is ``--feasibility auto``'s: in MuJoCo the fitted ``mujoco`` profile.
 
 The 2D ceiling: a failed place tips or drops its object (given up) 15 % of the time, so
 even from the best reach (a place succeeds 97 % of the time) each place is lost with

@@ -96,6 +96,8 @@ STEPS: tuple[Step, ...] = (
     _d("family-grop-100", ("The issue's target, every object placed in 90 % of episodes",),
        "python benchmarks/family_table.py --seeds 100 --methods grop --capacities 1 --jobs 2",
        note="GROP over 100 seeds (about 3 minutes)"),
+    _t("family-planning", ("**Planning time as the table grows**",),
+       "python benchmarks/family_planning.py", note="about 1.5 minutes"),
     _d("family-mujoco", ("In MuJoCo (`family_table.py --simulator mujoco",),
        "python benchmarks/family_table.py --simulator mujoco --methods grop --capacities 1,4"
        " --seeds 10 --jobs 2", note="six diners in physics (about 30 minutes on 2 cores)"),
