@@ -126,7 +126,8 @@ def arrange_options(s: RunSettings, base: ArrangeOptions | None = None) -> Arran
         else base.preference_pool
     examples = "" if s.zero_shot else (base.examples if base.examples != "" else None)
     return replace(base, m=s.m, max_attempts=s.attempts, examples=examples, notes=s.notes,
-                   params=sampling(s), preferences=s.preferences, preference_pool=pool)
+                   params=sampling(s), preferences=s.preferences, preference_pool=pool,
+                   revisions=s.revisions)
 
 
 def sampling(s: RunSettings) -> SamplingParams:

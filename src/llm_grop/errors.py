@@ -111,6 +111,20 @@ class Infeasible(LLMGropError):
     exit_code = 1
 
 
+class NoArrangement(Infeasible):
+    """The sampler found too few configurations that keep the relations: ``objects`` are
+    the objects where configurations got stuck most, ``why`` the commonest rejection there
+    (``"mug leaves the 0.45 x 0.3 m table"``), for the feedback loop to tell the LLM."""
+
+    def __init__(self, message: str = "", objects: tuple[str, ...] = (), why: str = ""
+                 ) -> None:
+        super().__init__(message)
+        self.objects, self.why = tuple(objects), why
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (type(self), (self.detail, self.objects, self.why))
+
+
 def interrupted(exc: BaseException) -> bool:
     """Whether ``exc`` is, or was caused by, an interrupt: an extension module that Ctrl-C
     stops while it initialises reports ``ImportError: initialization failed`` from the

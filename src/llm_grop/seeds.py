@@ -58,6 +58,7 @@ STAGES: dict[str, int] = {
     "ratings.order": 18,
     "bootstrap": 19,
     "llm.reading": 20,
+    "llm.revision": 21,
 }
 
 

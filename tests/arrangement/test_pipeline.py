@@ -59,8 +59,10 @@ def test_same_seed_same_json(chat_server) -> None:
 
 
 def test_paper_conflict_is_found_and_reprompted(chat_server) -> None:
+    """With ``revisions=0`` a contradiction is answered as the paper does: Template 1 is
+    asked again, blindly, with a new seed."""
     chat_server.reply = scripted([PAPER_CONFLICT, PAPER_CONSISTENT])
-    result = _arrange(chat_server, PAPER_REQUEST)
+    result = _arrange(chat_server, PAPER_REQUEST, revisions=0)
     first = result.attempts[0]
     assert not first.consistent
     lines = PAPER_CONFLICT.splitlines()
@@ -69,6 +71,7 @@ def test_paper_conflict_is_found_and_reprompted(chat_server) -> None:
     assert result.arrangement.conflicts == (first.conflict,)
     seeds = [c.seed for c in result.arrangement.llm.calls[:2]]
     assert seeds[0] != seeds[1], "a re-prompt must resample"
+    assert result.revisions == () and "cannot be used" not in str(chat_server.requests)
 
 
 def test_attempts_run_out_keeps_largest_consistent_subset(chat_server) -> None:

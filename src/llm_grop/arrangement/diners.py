@@ -20,7 +20,7 @@ from shapely.geometry import Polygon
 from llm_grop import seeds
 from llm_grop.arrangement.sampling import violations
 from llm_grop.arrangement.setting import Sampled, Setting
-from llm_grop.errors import BadInput, Infeasible
+from llm_grop.errors import BadInput, Infeasible, NoArrangement
 from llm_grop.geometry.places import Place, default_seats, places
 from llm_grop.world.angles import wrap_angle
 from llm_grop.world.arrangement import Configuration, Item, Placement
@@ -35,6 +35,9 @@ Ask = Callable[[Sequence[Item], Table], Setting]
 #: ``sample(items, setting, box, rng_factory, region)``: one diner's sampled setting.
 Sample = Callable[[Sequence[Item], Setting, Table, Callable[[], np.random.Generator],
                    Polygon | None], Sampled]
+#: ``revise(items, setting, box, failure)``: a revision of a setting no configuration in
+#: ``box`` keeps (the feedback loop's), or ``None``.
+Revise = Callable[[Sequence[Item], Setting, Table, NoArrangement], Setting | None]
 
 
 @dataclass(frozen=True)
@@ -142,31 +145,43 @@ def _joined(fidelity: Sequence[Fidelity]) -> Fidelity:
 
 
 def arrange_diners(items: Sequence[Item], table: Table, catalog: Catalog, seed: int,
-                   say: Callable[[str], None], ask: Ask, sample: Sample) -> Diners:
-    """Every diner's setting (see the module doc). Raises :class:`BadInput` when a diner's
-    setting does not fit in their place."""
+                   say: Callable[[str], None], ask: Ask, sample: Sample,
+                   revise: Revise | None = None) -> Diners:
+    """Every diner's setting (see the module doc). When no configuration of a diner's
+    setting fits their place, ``revise`` may give a revision of that distinct setting
+    (in its first diner's names); every diner is then sampled again. Raises
+    :class:`BadInput` when a diner's setting does not fit in their place."""
     check_fit(items, table)
     groups = diner_groups(items)
     seated = places(table, table.seats)
     distinct: dict[tuple[str, ...], tuple[tuple[Item, ...], Setting]] = {}
-    settings, sampled = [], []
-    for k, (group, place) in enumerate(zip(groups, seated, strict=True)):
-        kinds = tuple(it.kind for it in group)
-        if kinds not in distinct:
-            base = items_from_names(kinds, catalog)
-            distinct[kinds] = (base, ask(base, place.box))
-        base, setting = distinct[kinds]
-        mine = _renamed(setting, {b.name: g.name for b, g in zip(base, group, strict=True)})
-        say(f"sampling configurations for diner {k + 1} of {len(groups)}")
-        try:
-            one = sample(group, mine, place.box,
-                         lambda k=k: seeds.stream(seed, "sampler", k), place.region)
-        except Infeasible as exc:
-            raise BadInput(f"{len(groups)} diners do not fit at the {table.label}: diner {k}'s "
-                           f"place ({place.box.width:.2f} x {place.box.depth:.2f} m) cannot "
-                           f"hold the setting ({exc})") from None
-        settings.append(mine)
-        sampled.append(one)
+    while True:
+        settings, sampled = [], []
+        for k, (group, place) in enumerate(zip(groups, seated, strict=True)):
+            kinds = tuple(it.kind for it in group)
+            if kinds not in distinct:
+                base = items_from_names(kinds, catalog)
+                distinct[kinds] = (base, ask(base, place.box))
+            base, setting = distinct[kinds]
+            names = {b.name: g.name for b, g in zip(base, group, strict=True)}
+            mine = _renamed(setting, names)
+            say(f"sampling configurations for diner {k + 1} of {len(groups)}")
+            try:
+                one = sample(group, mine, place.box,
+                             lambda k=k: seeds.stream(seed, "sampler", k), place.region)
+            except NoArrangement as exc:
+                revised = None if revise is None else \
+                    revise(base, setting, place.box, _in_base_names(exc, names))
+                if revised is None:
+                    raise _no_fit(len(groups), table, k, place, exc) from None
+                distinct[kinds] = (base, revised)
+                break
+            except Infeasible as exc:
+                raise _no_fit(len(groups), table, k, place, exc) from None
+            settings.append(mine)
+            sampled.append(one)
+        else:
+            break
     m = min(len(s.configurations) for s in sampled)
     configs = tuple(Configuration(tuple(
         p for k, (s, place) in enumerate(zip(sampled, seated, strict=True))
@@ -174,6 +189,22 @@ def arrange_diners(items: Sequence[Item], table: Table, catalog: Catalog, seed: 
     fid = tuple(_joined([s.fidelity[c] for s in sampled]) for c in range(m))
     return Diners(tuple(settings), tuple(sampled), tuple(s for _, s in distinct.values()),
                   configs, fid)
+
+
+def _no_fit(n: int, table: Table, k: int, place: Place, exc: Infeasible) -> BadInput:
+    """The error for diner ``k``'s setting that does not fit their place."""
+    return BadInput(f"{n} diners do not fit at the {table.label}: diner {k}'s place "
+                    f"({place.box.width:.2f} x {place.box.depth:.2f} m) cannot hold the "
+                    f"setting ({exc})")
+
+
+def _in_base_names(exc: NoArrangement, names: dict[str, str]) -> NoArrangement:
+    """``exc`` in the first diner's object names (``names`` maps them to this diner's)."""
+    back = {mine: base for base, mine in names.items()}
+    why = exc.why
+    for mine in sorted(back, key=len, reverse=True):
+        why = why.replace(mine, back[mine])
+    return NoArrangement(exc.detail, tuple(back.get(o, o) for o in exc.objects), why)
 
 
 def in_place_frames(placements: Sequence[Placement], table: Table

@@ -11,9 +11,7 @@ number can be read :data:`DEFAULT_EDGE_GAP_CM` is used. The answers are read by
 
 from __future__ import annotations
 
-import functools
-from importlib import resources
-
+from llm_grop.arrangement.relations import asset, with_article
 from llm_grop.language.distance import MAX_GAP_CM, parse_distance_cm
 from llm_grop.world.relation import CENTER, STACKING, Relation
 
@@ -26,15 +24,6 @@ DEFAULT_GAP_CM = 5.0
 DEFAULT_EDGE_GAP_CM = DEFAULT_GAP_CM
 
 
-@functools.lru_cache(maxsize=4)
-def _asset(name: str) -> str:
-    return resources.files("llm_grop.arrangement").joinpath(f"prompts/{name}").read_text("utf-8")
-
-
-def _a(name: str) -> str:
-    return f"{'an' if name[:1] in ('a', 'e', 'i', 'o', 'u') else 'a'} {name}"
-
-
 def template2_prompt(relation: Relation) -> str:
     """Template 2 for one relation: how many centimetres apart its two objects should be.
 
@@ -42,24 +31,24 @@ def template2_prompt(relation: Relation) -> str:
     """
     if relation.relation == CENTER or relation.relation in STACKING or relation.reference is None:
         raise ValueError(f"no distance is asked for {relation.relation!r}")
-    a_subject = _a(relation.subject)
-    return _asset("template2.txt").format(
+    a_subject = with_article(relation.subject)
+    return asset("template2.txt").format(
         A_subject=a_subject[0].upper() + a_subject[1:], subject=relation.subject,
-        relation=relation.relation, a_reference=_a(relation.reference),
+        relation=relation.relation, a_reference=with_article(relation.reference),
         reference=relation.reference).strip()
 
 
 def edge_prompt(subject: str) -> str:
     """The Template 2-style question of how many centimetres from the diner's edge of the
     table the origin object ``subject`` goes."""
-    a_subject = _a(subject)
-    return _asset("edge.txt").format(A_subject=a_subject[0].upper() + a_subject[1:],
+    a_subject = with_article(subject)
+    return asset("edge.txt").format(A_subject=a_subject[0].upper() + a_subject[1:],
                                      subject=subject).strip()
 
 
 def template2_grammar() -> str:
     """GBNF for "About N centimeters." or "N-M centimeters." (N, M of one or two digits)."""
-    return _asset("template2.gbnf")
+    return asset("template2.gbnf")
 
 
 def parse_distance_m(text: str, default_cm: float = DEFAULT_GAP_CM) -> tuple[float, bool]:

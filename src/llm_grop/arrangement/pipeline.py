@@ -1,16 +1,19 @@
 """The semantic arrangement pipeline (paper §III-A and §III-B).
 
 request items -> Template 1 -> parsed relations (+ follow-ups for left-out objects)
--> clingo consistency check (re-prompt with a new seed on conflict, bounded)
+-> clingo consistency check (on conflict the LLM is told what clashed and revises its
+   answer, :mod:`~llm_grop.arrangement.revision`; then, or with ``--revisions 0``, it is
+   asked again with a new seed, bounded)
 -> Template 2 distances, and the origin object's distance from the diner's edge
--> LLM-guided positions -> M sampled configurations, each measured for fidelity.
+-> LLM-guided positions -> M sampled configurations, each measured for fidelity (when none
+   keeps the relations, the LLM is told which object did not fit and revises them).
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from shapely.geometry import Polygon
@@ -19,59 +22,34 @@ from llm_grop import seeds
 from llm_grop.arrangement import (
     consistency,
     diners,
-    distances,
     fidelity,
     geometry,
     preferences,
     relations,
+    revision,
     sampling,
 )
+from llm_grop.arrangement.grounding import Grounding, ground, preview, stated_for
 from llm_grop.arrangement.layout import GuidedLayout
+from llm_grop.arrangement.options import ArrangeOptions
+from llm_grop.arrangement.revision import Feedback
 from llm_grop.arrangement.setting import Attempt, Sampled, Setting
-from llm_grop.errors import BadInput, Infeasible, LLMAnswerUnusable, ReplayMissing
+from llm_grop.errors import Infeasible, LLMAnswerUnusable, NoArrangement
 from llm_grop.language.answer_reader import parse_relations
-from llm_grop.llm.base import CallLog, SamplingParams
-from llm_grop.settings import DEFAULTS
+from llm_grop.llm.base import CallLog
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
+from llm_grop.world.failure import Revision
 from llm_grop.world.fidelity import Fidelity
 from llm_grop.world.llmlog import CallRecord, LLMSummary
-from llm_grop.world.relation import CENTER, STACKING, Choice, Relation
+from llm_grop.world.relation import CENTER, Relation, dedupe
 from llm_grop.world.request import Request
 from llm_grop.world.table import Table
 
+__all__ = ["ArrangeOptions", "ArrangementResult", "arrange_items", "sample_revising",
+           "sample_setting"]
+
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class ArrangeOptions:
-    """Settings of :func:`arrange_items`.
-
-    ``m``: configurations to sample. ``max_attempts``: Template 1 prompts before
-    giving up on a fully consistent answer (the first one included).
-    ``examples``: the few-shot block of Template 1 (``None``: the paper's
-    examples; ``""``: zero-shot). ``notes``: Template 1's [notes] slot.
-    ``reprompt_temperature_step``: added to the temperature at each re-prompt
-    (capped at 1.0), because at the paper's 0.1 a new seed alone rarely changes
-    the answer. ``gap_tolerance_m``: every configuration keeps each stated gap and the
-    diner's distance within this many metres (``None``: no such check; see
-    :mod:`llm_grop.arrangement.fidelity`). ``stated``: relations the request states
-    between its objects (``source="request"``, first diner's names); they take the
-    preferences' precedence. ``choices``: the ambiguous ones ("the knife beside the plate"),
-    decided by the LLM's relations or clingo (:func:`~llm_grop.arrangement.consistency.choose`).
-    """
-
-    m: int = DEFAULTS.m
-    max_attempts: int = DEFAULTS.attempts
-    examples: str | None = None
-    notes: str = ""
-    params: SamplingParams = field(default_factory=SamplingParams)
-    reprompt_temperature_step: float = 0.3
-    preferences: tuple[str, ...] = ()
-    preference_pool: tuple[str, ...] = ()
-    gap_tolerance_m: float | None = fidelity.GAP_TOLERANCE_M
-    stated: tuple[Relation, ...] = ()
-    choices: tuple[Choice, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -82,7 +60,7 @@ class ArrangementResult:
     them (the planner chooses among these); ``dropped`` the LLM lines left out
     to restore consistency; ``gaps_m`` the stated gaps by relation key; ``edge_gap_m``
     the origin's stated distance from the diner's edge; ``fidelity`` one measure per
-    configuration.
+    configuration; ``revisions`` the feedback loop's rounds.
     """
 
     arrangement: Arrangement
@@ -93,20 +71,7 @@ class ArrangementResult:
     gaps_m: dict[tuple[str, str, str | None], float]
     edge_gap_m: float | None = None
     fidelity: tuple[Fidelity, ...] = ()
-
-
-def _dedupe(rels: Sequence[Relation]) -> list[Relation]:
-    """Drops repeats of a fact, also when restated as its converse."""
-    seen: set[tuple[str, str, str | None]] = set()
-    out = []
-    for r in rels:
-        if r.key() in seen:
-            continue
-        seen.add(r.key())
-        if r.reference is not None:
-            seen.add(r.converse().key())
-        out.append(r)
-    return out
+    revisions: tuple[Revision, ...] = ()
 
 
 def _anchor_for(missing: str, items: Sequence[Item], rels: Sequence[Relation]) -> str:
@@ -141,7 +106,7 @@ def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: 
             answer = parse_relations(record.response, items, catalog)
             found += [r for r in answer.relations if missing in (r.subject, r.reference)]
             ignored += list(answer.ignored) + [c.words for c in answer.choices]
-    found = _dedupe(found)
+    found = list(dedupe(found))
     report = consistency.check(found)
     return Attempt(s, tuple(found), report.conflict, tuple(ignored))
 
@@ -158,42 +123,34 @@ def _choose_relations(attempts: Sequence[Attempt]) -> tuple[tuple[Relation, ...]
     return best, [r for r in best_source if r.key() not in kept]
 
 
-def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Table, seed: int,
-              options: ArrangeOptions, say: Callable[[str], None]) -> Setting:
-    """Relations (Template 1, preferences, clingo), gaps (Template 2) and the diner's
-    distance for one setting of ``items`` on a place of ``table``'s size."""
+def _symbolic(items: Sequence[Item], table: Table, g: Grounding, feedback: Feedback
+              ) -> Setting:
+    """Relations (Template 1, preferences, clingo; a contradiction explained back to the
+    LLM while ``feedback`` has rounds left), gaps (Template 2) and the diner's distance for
+    one setting of ``items`` on a place of ``table``'s size."""
+    llm, options = g.llm, g.options
     warnings: list[str] = []
     attempts: list[Attempt] = []
     accepted: tuple[Relation, ...] = ()
     dropped: list[Relation] = []
-    names = {it.name for it in items}
-
-    def ours(rels: Sequence[Relation]) -> bool:
-        return all(r.subject in names and (r.reference is None or r.reference in names)
-                   for r in rels)
-
-    stated = [r for r in options.stated if ours([r])]
-    read = preferences.read_preferences(options.preferences, options.preference_pool, items,
-                                        catalog)
-    prefs = preferences.combine(stated, read.relations)
-    choices = [c for c in (*options.choices, *read.choices)
-               if all(ours(option) for option in c.options)]
-    conflict = consistency.choose(prefs, choices).conflict if choices else ()
-    if conflict:
-        raise BadInput(preferences.contradiction(conflict))
-    if preferences.covers(prefs, items):
-        say("the stated relations relate every object: Template 1 is not asked")
+    stated = stated_for(items, options, g.catalog)
+    if preferences.covers(stated.relations, items):
+        g.say("the stated relations relate every object: Template 1 is not asked")
     elif len(items) > 1:
         for k in range(options.max_attempts):
-            say(f"asking {llm.model} for symbolic relations "
-                f"(attempt {k + 1}/{options.max_attempts})")
-            attempt = _ask_relations(items, llm, catalog, seed, k, options)
+            g.say(f"asking {llm.model} for symbolic relations "
+                  f"(attempt {k + 1}/{options.max_attempts})")
+            attempt = _ask_relations(items, llm, g.catalog, g.seed, k, options)
             attempts.append(attempt)
             if attempt.conflict:
                 log.info("attempt %d conflicts: %s", k + 1,
                          "; ".join(r.line or r.sentence() for r in attempt.conflict))
             if attempt.consistent:
                 accepted = attempt.relations
+                break
+            revised = _revise_conflict(items, attempt, feedback)
+            if revised is not None:
+                accepted = revised
                 break
         else:
             accepted, dropped = _choose_relations(attempts)
@@ -203,99 +160,65 @@ def _symbolic(items: Sequence[Item], llm: CallLog, catalog: Catalog, table: Tabl
                 raise LLMAnswerUnusable(
                     f"{llm.backend} LLM gave no usable spatial relation in "
                     f"{options.max_attempts} attempt(s){detail}")
-            warnings += [f"dropped to restore consistency: {_preview(r.line or r.sentence())}"
+            warnings += [f"dropped to restore consistency: {preview(r.line or r.sentence())}"
                          for r in dropped]
         for attempt in attempts:
             warnings += [f"ignored LLM line: {line}" for line in attempt.ignored if line]
-    if choices:
-        decided = consistency.choose(prefs, choices, hints=accepted)
-        prefs = (*prefs, *decided.relations)
-        warnings += [_decided(c, c.options[k], why) for c, k, why
-                     in zip(choices, decided.picked, decided.why, strict=True)]
-    if prefs:
-        accepted, overridden = preferences.merge(prefs, accepted)
-        said = {r.key() for r in prefs} | {r.converse().key() for r in prefs
-                                            if r.reference is not None}
-        warnings += [f"overridden by a stated relation: {_preview(r.line or r.sentence())}"
-                     for r in overridden if r.key() not in said]
-    related = {r.subject for r in accepted} | {r.reference for r in accepted}
-    warnings += [f"no usable relation for the {it.name}: the answers left it out, so "
-                 f"the sampler places it alone" for it in items
-                 if len(items) > 1 and it.name not in related]
-
-    gaps: dict[tuple[str, str, str | None], float] = {}
-    stated_gap = preferences.stated_gaps(prefs, table)
-    for k, rel in enumerate(accepted):
-        if rel.relation == CENTER or rel.relation in STACKING:
-            continue
-        if rel.key() in stated_gap:
-            gaps[rel.key()] = stated_gap[rel.key()]
-            continue
-        say(f"asking {llm.model} for the distance: {rel.sentence()}")
-        record = llm.complete(distances.template2_prompt(rel),
-                              options.params.with_seed(seeds.int_seed(seed, "llm.distance", k)),
-                              distances.template2_grammar())
-        gaps[rel.key()], defaulted = distances.parse_distance_m(record.response)
-        if defaulted:
-            warnings.append(f"no distance in {_preview(record.response)!r}; used "
-                            f"{distances.DEFAULT_GAP_CM:g} cm for: {rel.sentence()}")
-    origin, edge_gap = _edge_distance(items, accepted, llm, catalog, table, seed, options, say,
-                                      warnings)
-    return Setting(accepted, gaps, origin, edge_gap, tuple(attempts), tuple(dropped),
-                   tuple(dict.fromkeys(warnings)))
+    return ground(items, accepted, stated, table, g, attempts=attempts, dropped=dropped,
+                  warnings=warnings)
 
 
-def _edge_distance(items: Sequence[Item], accepted: Sequence[Relation], llm: CallLog,
-                   catalog: Catalog, table: Table, seed: int, options: ArrangeOptions,
-                   say: Callable[[str], None], warnings: list[str]) -> tuple[str, float]:
-    """The layout's origin and its distance, metres, from the diner's edge: a preference's,
-    else the LLM's answer, else :data:`~llm_grop.arrangement.distances.DEFAULT_EDGE_GAP_CM`."""
-    edges = preferences.read_edge_preferences(options.preferences, options.preference_pool,
-                                              items, catalog, table)
-    origin = geometry.choose_origin(items, accepted, anchored=edges)
-    warnings += [f"unused: a distance from the diner's edge applies to the origin "
-                 f"({origin}), not to {name}" for name in edges if name != origin]
-    if origin in edges:
-        return origin, edges[origin]
-    say(f"asking {llm.model} for the distance of the {origin} from the diner's edge")
-    try:
-        answer = llm.complete(distances.edge_prompt(origin),
-                              options.params.with_seed(seeds.int_seed(seed, "llm.edge", 0)),
-                              distances.template2_grammar()).response
-    except ReplayMissing:
-        # Recordings made before llm-grop asked this question still replay.
-        warnings.append(f"the replayed recording has no answer to the diner's-edge question "
-                        f"(recorded before llm-grop 0.4); used "
-                        f"{distances.DEFAULT_EDGE_GAP_CM:g} cm for the {origin}")
-        return origin, distances.DEFAULT_EDGE_GAP_CM / 100
-    edge_gap, defaulted = distances.parse_distance_m(answer, distances.DEFAULT_EDGE_GAP_CM)
-    if edge_gap > table.depth / 2:
-        warnings.append(f"{100 * edge_gap:g} cm from the diner's edge is beyond the middle "
-                        f"of the {table.depth:g} m deep place; used "
-                        f"{distances.DEFAULT_EDGE_GAP_CM:g} cm for the {origin}")
-        edge_gap = distances.DEFAULT_EDGE_GAP_CM / 100
-    elif defaulted:
-        warnings.append(f"no distance in {_preview(answer)!r}; used "
-                        f"{distances.DEFAULT_EDGE_GAP_CM:g} cm from the diner's edge "
-                        f"for the {origin}")
-    return origin, edge_gap
+def _revise_conflict(items: Sequence[Item], attempt: Attempt, feedback: Feedback
+                     ) -> tuple[Relation, ...] | None:
+    """The LLM's revision of ``attempt``'s contradicting relations, told what clashed; a
+    revision that clashes again is explained in turn while rounds are left. ``None`` when
+    no round is left or a revision is refused for another reason."""
+    proposed, conflict = attempt.relations, attempt.conflict
+    while conflict and feedback.left > 0:
+        revised = feedback.revise(items, proposed, revision.logical_failure(conflict))
+        if revised is not None:
+            return revised
+        again = feedback.done[-1].revised
+        if not again or {r.key() for r in again} == {r.key() for r in proposed}:
+            return None
+        proposed, conflict = again, consistency.check(again).conflict
+    return None
 
 
-_WHY = {"hint": "as the LLM's relations have it",
-        "forced": "the only way the other relations allow",
-        "first": "the first way that fits the other relations; nothing said which"}
+def _revise_geometry(items: Sequence[Item], setting: Setting, table: Table,
+                     failure: NoArrangement, g: Grounding, feedback: Feedback
+                     ) -> Setting | None:
+    """``setting`` with the LLM's revision of its relations, told which object no
+    placement on ``table`` could hold and why; ``None`` when no round is left or the
+    revision is refused."""
+    if feedback.left <= 0:
+        return None
+    told = revision.geometric_failure(failure.objects, failure.why, setting.relations,
+                                      f"the {table.label}")
+    revised = feedback.revise(items, setting.relations, told)
+    if revised is None:
+        return None
+    return ground(items, revised, stated_for(items, g.options, g.catalog), table, g,
+                  attempts=setting.attempts, dropped=setting.dropped,
+                  warnings=setting.warnings, known=setting)
 
 
-def _decided(choice: Choice, option: Sequence[Relation], why: str) -> str:
-    """The warning that says how an ambiguous stated relation was decided, and why."""
-    said = "; ".join(f"the {r.subject} {r.relation} the {r.reference}" for r in option)
-    return f"{choice.words or 'an ambiguous relation'!r} read as {said} ({_WHY[why]})"
-
-
-def _preview(answer: str, limit: int = 120) -> str:
-    """An LLM answer shortened for a warning: one line of at most ``limit`` characters."""
-    text = " ".join(answer[:4 * limit].split())
-    return text if len(text) <= limit else text[:limit - 1] + "…"
+def sample_revising(items: Sequence[Item], setting: Setting, table: Table,
+                    rng: Callable[[], np.random.Generator], options: ArrangeOptions,
+                    revise: Callable[[Setting, NoArrangement], Setting | None],
+                    region: Polygon | None = None) -> tuple[Sampled, Setting]:
+    """:func:`sample_setting`, and when no configuration keeps the relations, sampled
+    again with ``revise``'s revision of them while it gives one; the sampled setting
+    and the setting it kept. Raises the sampler's :class:`~llm_grop.errors.Infeasible`
+    when ``revise`` gives none."""
+    while True:
+        try:
+            return sample_setting(items, setting, table, rng, options, region), setting
+        except NoArrangement as exc:
+            revised = revise(setting, exc)
+            if revised is None:
+                raise
+            setting = revised
 
 
 def sample_setting(items: Sequence[Item], setting: Setting, table: Table,
@@ -342,6 +265,10 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
     the LLM is asked once per distinct setting, and each diner's setting is laid out and
     sampled in that diner's place (:mod:`llm_grop.arrangement.diners`).
 
+    A contradiction among the LLM's relations, and relations no configuration keeps, are
+    explained back to the LLM for a revision (at most ``options.revisions`` rounds, all
+    recorded in ``revisions``; :mod:`llm_grop.arrangement.revision`).
+
     Raises :class:`~llm_grop.errors.LLMError` when no attempt yields a usable
     relation and :class:`~llm_grop.errors.Infeasible` when no configuration fits.
     """
@@ -362,12 +289,19 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
             on_event(message)
 
     first_call = len(llm.calls)
+    g = Grounding(llm, catalog, seed, options, say)
+    feedback = Feedback(llm, catalog, seed, options.params, options.revisions, say)
+
+    def revise(its: Sequence[Item], st: Setting, box: Table, exc: NoArrangement
+               ) -> Setting | None:
+        return _revise_geometry(its, st, box, exc, g, feedback)
+
     if any(it.diner is not None for it in items):
         several = diners.arrange_diners(
             items, table, catalog, seed, say,
-            lambda base, box: _symbolic(base, llm, catalog, box, seed, options, say),
+            lambda base, box: _symbolic(base, box, g, feedback),
             lambda its, st, box, rng, region: sample_setting(its, st, box, rng, options,
-                                                             region))
+                                                             region), revise)
         relations_all = tuple(r for s in several.settings for r in s.relations)
         warnings = tuple(w for s in several.distinct for w in s.warnings) + \
             tuple(w for s in several.sampled for w in s.warnings)
@@ -377,15 +311,17 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
         layout, edge_gap = several.sampled[0].layout, several.settings[0].edge_gap_m
         configs, measured = several.configurations, several.fidelity
     else:
-        setting = _symbolic(items, llm, catalog, table, seed, options, say)
+        setting = _symbolic(items, table, g, feedback)
         say("sampling configurations")
-        one = sample_setting(items, setting, table, lambda: seeds.stream(seed, "sampler"),
-                             options)
+        one, setting = sample_revising(
+            items, setting, table, lambda: seeds.stream(seed, "sampler"), options,
+            lambda st, exc: revise(items, st, table, exc))
         relations_all, layout, configs, measured = setting.relations, one.layout, \
             one.configurations, one.fidelity
         warnings = setting.warnings + one.warnings
         attempts, dropped, gaps = setting.attempts, setting.dropped, setting.gaps
         edge_gap = setting.edge_gap_m
+    warnings += tuple(feedback.warnings)
     arrangement = Arrangement(
         request=request, table=table, placements=configs[0].placements,
         relations=relations_all,
@@ -393,6 +329,7 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
                        llm.chosen_by),
         warnings=reading_warnings + warnings,
         conflicts=tuple(a.conflict for a in attempts if a.conflict), read_by=read_by,
-        origins=tuple((it.name, it.source, it.words) for it in items))
+        origins=tuple((it.name, it.source, it.words) for it in items),
+        revisions=tuple(feedback.done))
     return ArrangementResult(arrangement, tuple(configs), layout, attempts, dropped, gaps,
-                             edge_gap, tuple(measured))
+                             edge_gap, tuple(measured), tuple(feedback.done))

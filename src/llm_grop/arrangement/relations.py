@@ -23,16 +23,19 @@ PAIR_RELATIONSHIPS = ", ".join(RELATION_NAMES[:-2]) + ", and " + RELATION_NAMES[
 
 
 @functools.lru_cache(maxsize=8)
-def _asset(name: str) -> str:
+def asset(name: str) -> str:
+    """The text of ``prompts/NAME``, a template beside this module."""
     return resources.files("llm_grop.arrangement").joinpath(f"prompts/{name}").read_text("utf-8")
 
 
-def _a(name: str) -> str:
+def with_article(name: str) -> str:
+    """``name`` with its indefinite article: "an apple", "a plate"."""
     return f"{'an' if name[:1] in ('a', 'e', 'i', 'o', 'u') else 'a'} {name}"
 
 
-def _object_list(names: Sequence[str]) -> str:
-    named = [_a(n) for n in names]
+def object_list(names: Sequence[str]) -> str:
+    """``names`` as Template 1 lists them: "a plate, a fork, and a knife"."""
+    named = [with_article(n) for n in names]
     if len(named) <= 2:
         return " and ".join(named)
     return ", ".join(named[:-1]) + ", and " + named[-1]
@@ -46,18 +49,19 @@ def template1_prompt(items: Sequence[Item], *, examples: str | None = None, note
     (``prompts/template1_examples.txt``); ``""`` asks zero-shot; any other text
     replaces them. ``notes`` is appended after the template's own note.
     """
-    block = _asset("template1_examples.txt") if examples is None else examples
-    return _asset("template1.txt").format(
+    block = asset("template1_examples.txt") if examples is None else examples
+    return asset("template1.txt").format(
         spatial_relationships=SPATIAL_RELATIONSHIPS,
         examples=f"\n{block.strip()}\n\n" if block.strip() else "",
-        objects=_object_list([it.name for it in items]),
+        objects=object_list([it.name for it in items]),
         notes=f" {notes.strip()}" if notes.strip() else "").strip()
 
 
 def followup_prompt(missing: str, anchor: str) -> str:
     """The authors' question for an object an answer left out, asking for one Place line."""
-    return _asset("followup.txt").format(a_missing=_a(missing), a_anchor=_a(anchor),
-                                         spatial_relationships=PAIR_RELATIONSHIPS).strip()
+    return asset("followup.txt").format(a_missing=with_article(missing),
+                                        a_anchor=with_article(anchor),
+                                        spatial_relationships=PAIR_RELATIONSHIPS).strip()
 
 
 def gbnf_literal(text: str) -> str:

@@ -63,7 +63,7 @@ from llm_grop.arrangement.sampler_checks import (
     pair_check,
     region_check,
 )
-from llm_grop.errors import BadInput, Infeasible
+from llm_grop.errors import BadInput, Infeasible, NoArrangement
 from llm_grop.geometry.places import inside_region
 from llm_grop.settings import DEFAULTS
 from llm_grop.world.arrangement import Configuration, Item, Placement
@@ -186,12 +186,13 @@ class _Stats:
     gave_up: Counter[str] = field(default_factory=Counter)
     reasons: defaultdict[str, Counter[str]] = field(default_factory=lambda: defaultdict(Counter))
 
-    def main_reason(self) -> str:
-        """The commonest rejection at the object where configurations got stuck most."""
+    def main_reason(self) -> tuple[str, str]:
+        """The object where configurations got stuck most and the commonest rejection
+        there (``("", "none recorded")`` when nothing was)."""
         if not self.gave_up:
-            return "none recorded"
+            return "", "none recorded"
         worst = self.gave_up.most_common(1)[0][0]
-        return self.reasons[worst].most_common(1)[0][0]
+        return worst, self.reasons[worst].most_common(1)[0][0]
 
 
 def _first_accepted(step: _Step, mean: tuple[Floats | float, Floats | float],
@@ -329,10 +330,11 @@ def sample_configurations(items: Sequence[Item], layout: GuidedLayout,
         if len(found) == m:
             break
     else:
-        reason = stats.main_reason()
-        raise Infeasible(f"no feasible arrangement after {drawn} samples "
-                         f"({len(found)} of {m} configurations found): "
-                         f"most rejections were because {reason}")
+        worst, reason = stats.main_reason()
+        raise NoArrangement(f"no feasible arrangement after {drawn} samples "
+                            f"({len(found)} of {m} configurations found): "
+                            f"most rejections were because {reason}",
+                            (worst,) if worst else (), reason)
     return tuple(_configuration(items, layout, x, y) for x, y in found)
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
 from rich.console import Console
@@ -11,6 +11,7 @@ from rich.text import Text
 
 from llm_grop.arrangement.pipeline import ArrangementResult
 from llm_grop.cli.flags import cli_words
+from llm_grop.world.failure import Revision
 from llm_grop.world.llmlog import LLMSummary
 from llm_grop.world.plan import ExecutedStep, RunResult
 
@@ -66,6 +67,7 @@ def print_arrangement(result: ArrangementResult, console: Console,
             console.print(f"[yellow]Attempt {k}: no usable relation in the answer[/yellow]")
         else:
             console.print(f"[green]Attempt {k}: consistent[/green]")
+    print_revisions(a.revisions, console)
     if result.dropped:
         console.print("[yellow]Kept the largest consistent subset; dropped:[/yellow]")
         for r in result.dropped:
@@ -80,7 +82,8 @@ def print_arrangement(result: ArrangementResult, console: Console,
     for r in a.relations:
         gap = result.gaps_m.get(r.key())
         rel_table.add_row(r.subject, r.relation, r.reference or "table",
-                          "" if gap is None else f"{gap * 100:.1f}", r.source)
+                          "" if gap is None else f"{gap * 100:.1f}",
+                          r.source if r.revision is None else f"{r.source}, revision {r.revision}")
     console.print(rel_table)
 
     # A line of its own: a table's title wraps at the table's width, which is narrow.
@@ -97,6 +100,20 @@ def print_arrangement(result: ArrangementResult, console: Console,
         print_llm(a.llm, console, err)
 
 
+def print_revisions(revisions: Sequence[Revision], console: Console) -> None:
+    """One line per round of the feedback loop: the failure told to the LLM and what came
+    of its revision (the failure's and the LLM's words are never rich markup)."""
+    for r in revisions:
+        head = f"Revision {r.round} ({r.failure.kind}): "
+        if r.outcome == "accepted":
+            said = "; ".join(x.sentence() for x in r.added) or "the same relations"
+            console.print(Text.assemble((head, "green"), f"accepted, {len(r.added)} relation(s) "
+                                        f"added, {len(r.removed)} dropped: {said}"))
+        else:
+            console.print(Text.assemble((head, "yellow"), f"refused ({r.note})"))
+        console.print(Text(f"  told: {r.failure.reason}"))
+
+
 def print_run(result: RunResult, console: Console, err: Console | None = None) -> None:
     """The episode's outcome: success, times, the plan and each object's actions, and the
     planned arrangement's warnings on ``err`` (stderr), else on ``console``."""
@@ -104,6 +121,7 @@ def print_run(result: RunResult, console: Console, err: Console | None = None) -
     console.print(Text.assemble(("Request:", "bold"), f" {result.request}"))
     console.print(f"[bold]Method:[/bold] {result.method}   [bold]seed:[/bold] {result.seed}   "
                   f"[bold]chairs sensed:[/bold] {len(result.scene.chairs)}")
+    print_revisions(result.planned.revisions, console)
     # Numbered from 0, as the JSON's configuration_index: one number in both places.
     console.print(f"Plan: configuration {plan.configuration_index} of "
                   f"{plan.configurations_considered} (from 0); expected utility "

@@ -125,6 +125,10 @@ class RelationDoc(Doc):
                                                  "(source request)")
     gap_m: Num | None = Field(None, description="the gap between the objects' edges the "
                                                 "user stated, metres")
+    revision: Annotated[int, Strict(), Field(ge=1)] | None = Field(
+        None, description="the round of the feedback loop (`revisions[].round`) whose answer "
+                          "first stated it, after a failure was explained to the LLM; absent: "
+                          "the LLM's first answer, or another source")
 
 
 class LLMCallDoc(Doc):
@@ -153,6 +157,38 @@ class LLMDoc(Doc):
                           "(absent: they were named)")
 
 
+class FailureDoc(Doc):
+    """Why relations could not be realised, as the feedback loop told the LLM."""
+
+    kind: Literal["logical", "geometric", "physical"] = Field(
+        description="logical: the relations contradict each other (clingo); geometric: no "
+                    "placement on the table keeps them (the sampler); physical: the robot "
+                    "could not carry out the plan (the executive)")
+    reason: Text = Field(description="the failure in plain words")
+    objects: list[Name] = Field([], description="the objects involved")
+    relations: list[RelationDoc] = Field([], description="the relations involved (logical: "
+                                                         "the minimal conflicting set)")
+
+
+class RevisionDoc(Doc):
+    """One round of the feedback loop: a failure told to the LLM and what came of it."""
+
+    round: Annotated[int, Strict(), Field(ge=1)]
+    failure: FailureDoc
+    asked: Text = Field(description="the prompt that told the LLM what failed and why")
+    answer: Text | None = Field(None, description="the LLM's answer (absent: none was "
+                                                  "available, e.g. a replay without it)")
+    outcome: Literal["accepted", "refused"] = Field(
+        description="accepted: the revised relations replaced the failed ones; refused: "
+                    "the answer held no usable relation, repeated the failed ones or "
+                    "contradicted itself, and the original failure stands")
+    note: Text | None = Field(None, description="why a revision was refused")
+    added: list[RelationDoc] = Field([], description="relations the revision states that "
+                                                     "the failed proposal did not")
+    removed: list[RelationDoc] = Field([], description="relations of the failed proposal "
+                                                       "the revision no longer states")
+
+
 class ArrangementDoc(Doc):
     """The arrangement JSON: ``llm-grop arrange --json``, and ``final``/``planned`` in a run."""
 
@@ -167,6 +203,9 @@ class ArrangementDoc(Doc):
     warnings: list[Text] = Field([], description="what the pipeline dropped or assumed")
     conflicts: list[list[RelationDoc]] = Field(
         [], description="per rejected LLM answer, the minimal set of conflicting lines")
+    revisions: list[RevisionDoc] | None = Field(
+        None, description="the feedback loop's rounds, in order (absent: no failure was "
+                          "explained to the LLM)")
     request_read_by: Literal["catalog", "llm"] | None = Field(
         None, description="how the request was read: by the catalog matcher alone (also "
                           "for the paper's tasks, whose objects are listed), or by an LLM "

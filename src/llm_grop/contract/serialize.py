@@ -9,16 +9,19 @@ from typing import Any, TypeVar
 from llm_grop.contract.models import (
     ArrangementDoc,
     Doc,
+    FailureDoc,
     LLMCallDoc,
     LLMDoc,
     ObjectDoc,
     RelationDoc,
+    RevisionDoc,
     TableDoc,
 )
 from llm_grop.datafile import validated
 from llm_grop.errors import BadInput
 from llm_grop.files.jsonio import rounded
 from llm_grop.world.arrangement import Arrangement, Placement
+from llm_grop.world.failure import Revision
 from llm_grop.world.llmlog import CallRecord, LLMSummary
 from llm_grop.world.relation import Relation
 from llm_grop.world.seat import Seat
@@ -44,6 +47,8 @@ def _relation(rel: Relation, line: bool = False) -> RelationDoc:
         extra["words"] = rel.line
     if rel.gap_m is not None:
         extra["gap_m"] = rounded(rel.gap_m)
+    if rel.revision is not None:
+        extra["revision"] = rel.revision
     return RelationDoc(subject=rel.subject, relation=rel.relation, reference=rel.reference,
                        source=rel.source, **extra)
 
@@ -66,6 +71,17 @@ def _call(c: CallRecord) -> LLMCallDoc:
     return LLMCallDoc(prompt=c.prompt, response=c.response, latency_s=round(c.latency_s, 4),
                       prompt_tokens=c.prompt_tokens, completion_tokens=c.completion_tokens,
                       seed=c.seed, **({"cached": True} if c.cached else {}))
+
+
+def _revision(r: Revision) -> RevisionDoc:
+    f = r.failure
+    return RevisionDoc(
+        round=r.round,
+        failure=FailureDoc(kind=f.kind, reason=f.reason, objects=list(f.objects),
+                           relations=[_relation(x, line=True) for x in f.relations]),
+        asked=r.asked, **({"answer": r.answer} if r.answer else {}), outcome=r.outcome,
+        **({"note": r.note} if r.note else {}),
+        added=[_relation(x) for x in r.added], removed=[_relation(x) for x in r.removed])
 
 
 def arrangement_doc(a: Arrangement, *, llm_log: bool = True, physical: bool = False
@@ -91,6 +107,7 @@ def arrangement_doc(a: Arrangement, *, llm_log: bool = True, physical: bool = Fa
         **llm,
         warnings=list(a.warnings),
         conflicts=[[_relation(r, line=True) for r in core] for core in a.conflicts],
+        **({"revisions": [_revision(r) for r in a.revisions]} if a.revisions else {}),
         **({"request_read_by": a.read_by} if a.read_by is not None else {}))
 
 
@@ -115,7 +132,8 @@ def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -
                                     o.z_m or 0.0, o.tilt_rad or 0.0))
     try:
         relations = tuple(Relation(r.subject, r.relation, r.reference, r.words or "",
-                                   source=r.source or "llm", gap_m=r.gap_m)
+                                   source=r.source or "llm", gap_m=r.gap_m,
+                                   revision=r.revision)
                           for r in doc.relations)
     except ValueError as exc:
         raise BadInput(f"{where}: relations: {exc}") from None

@@ -119,7 +119,7 @@ def final_arrangement(planned: Arrangement, execution: Execution) -> Arrangement
                  if r.subject in names and (r.reference is None or r.reference in names)
                  and not _breaks(config, r, planned))
     return replace(planned, placements=execution.final, relations=kept, warnings=(),
-                   conflicts=())
+                   conflicts=(), revisions=())
 
 
 def _breaks(config: Configuration, relation: Relation, planned: Arrangement) -> bool:

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from llm_grop.world.catalog import ObjectSpec
+from llm_grop.world.failure import Revision
 from llm_grop.world.llmlog import LLMSummary
 from llm_grop.world.relation import Relation
 from llm_grop.world.table import Table
@@ -99,7 +100,8 @@ class Configuration:
 class Arrangement:
     """The contract's arrangement: a table, placed objects and the relations they keep.
 
-    ``warnings`` and ``conflicts`` record what the pipeline dropped or re-prompted.
+    ``warnings`` and ``conflicts`` record what the pipeline dropped or re-prompted, and
+    ``revisions`` what the feedback loop told the LLM and what it answered.
     """
 
     request: str
@@ -113,3 +115,5 @@ class Arrangement:
     read_by: str | None = None
     #: Where each object came from: ``(name, source, words)`` (see :class:`Item`).
     origins: tuple[tuple[str, str, str], ...] = ()
+    #: The feedback loop's rounds: each failure told to the LLM and what came of it.
+    revisions: tuple[Revision, ...] = ()

@@ -12,7 +12,7 @@ checked once, at import; every name below is derived from it, and so are clingo'
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from types import MappingProxyType
@@ -227,7 +227,8 @@ class Relation:
     ``line`` is the text the relation was read from: the LLM's line, a preference's
     sentence, or the request's words. ``source`` is one of :data:`SOURCES`. ``gap_m`` is a
     distance the user stated for it (the gap between the objects' edges, metres), else
-    ``None``.
+    ``None``. ``revision`` is the round of the feedback loop whose answer first stated it
+    (:mod:`llm_grop.world.failure`), ``None`` for the LLM's first answer and other sources.
     """
 
     subject: str
@@ -236,6 +237,7 @@ class Relation:
     line: str = ""
     source: str = "llm"
     gap_m: float | None = None
+    revision: int | None = None
 
     def __post_init__(self) -> None:
         if self.relation not in RELATION_NAMES:
@@ -256,7 +258,7 @@ class Relation:
         if self.reference is None:
             raise ValueError("'center' has no converse")
         return Relation(self.reference, CONVERSE[self.relation], self.subject, self.line,
-                        self.source, self.gap_m)
+                        self.source, self.gap_m, self.revision)
 
     def key(self) -> tuple[str, str, str | None]:
         """``(subject, relation, reference)`` without the source line."""
@@ -284,3 +286,18 @@ class Choice:
         if not all(isinstance(r, Relation) for option in options for r in option):
             raise ValueError("a choice's options hold relations")
         object.__setattr__(self, "options", options)
+
+
+def dedupe(relations: Sequence[Relation]) -> tuple[Relation, ...]:
+    """``relations`` without repeats of a fact, also when restated as its converse (the
+    first statement is kept)."""
+    seen: set[tuple[str, str, str | None]] = set()
+    out = []
+    for r in relations:
+        if r.key() in seen:
+            continue
+        seen.add(r.key())
+        if r.reference is not None:
+            seen.add(r.converse().key())
+        out.append(r)
+    return tuple(out)

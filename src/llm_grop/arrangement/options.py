@@ -1,0 +1,44 @@
+"""The arrangement pipeline's options (:func:`llm_grop.arrangement.pipeline.arrange_items`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from llm_grop.arrangement import fidelity
+from llm_grop.llm.base import SamplingParams
+from llm_grop.settings import DEFAULTS
+from llm_grop.world.relation import Choice, Relation
+
+
+@dataclass(frozen=True)
+class ArrangeOptions:
+    """Settings of :func:`arrange_items`.
+
+    ``m``: configurations to sample. ``max_attempts``: Template 1 prompts before
+    giving up on a fully consistent answer (the first one included).
+    ``examples``: the few-shot block of Template 1 (``None``: the paper's
+    examples; ``""``: zero-shot). ``notes``: Template 1's [notes] slot.
+    ``reprompt_temperature_step``: added to the temperature at each re-prompt
+    (capped at 1.0), because at the paper's 0.1 a new seed alone rarely changes
+    the answer. ``gap_tolerance_m``: every configuration keeps each stated gap and the
+    diner's distance within this many metres (``None``: no such check; see
+    :mod:`llm_grop.arrangement.fidelity`). ``stated``: relations the request states
+    between its objects (``source="request"``, first diner's names); they take the
+    preferences' precedence. ``choices``: the ambiguous ones ("the knife beside the plate"),
+    decided by the LLM's relations or clingo (:func:`~llm_grop.arrangement.consistency.choose`).
+    ``revisions``: rounds of the feedback loop (:mod:`llm_grop.arrangement.revision`) per
+    run; 0 re-prompts blindly on a contradiction, as the paper does.
+    """
+
+    m: int = DEFAULTS.m
+    max_attempts: int = DEFAULTS.attempts
+    examples: str | None = None
+    notes: str = ""
+    params: SamplingParams = field(default_factory=SamplingParams)
+    reprompt_temperature_step: float = 0.3
+    preferences: tuple[str, ...] = ()
+    preference_pool: tuple[str, ...] = ()
+    gap_tolerance_m: float | None = fidelity.GAP_TOLERANCE_M
+    stated: tuple[Relation, ...] = ()
+    choices: tuple[Choice, ...] = ()
+    revisions: int = DEFAULTS.revisions
