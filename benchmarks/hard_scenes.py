@@ -46,6 +46,7 @@ from llm_grop import BackendOptions, run  # noqa: E402
 from llm_grop.contract.serialize import arrangement_doc  # noqa: E402
 from llm_grop.errors import LLMGropError  # noqa: E402
 from llm_grop.evaluation.rater import rate  # noqa: E402
+from llm_grop.world.plan import RunResult  # noqa: E402
 
 SCENES = Path(__file__).parent / "data" / "hard_scenes.yaml"
 LOOP = {"without the loop (--revisions 0)": 0, "with the loop (--revisions 2)": 2}
@@ -63,6 +64,7 @@ class Episode:
     calls: int = 0
     planning_s: float = math.nan
     error: str | None = None
+    execution_s: float = math.nan
 
 
 def stand_in(scene: Mapping[str, Any]) -> Any:
@@ -90,6 +92,11 @@ def episode(scene: Mapping[str, Any], seed: int, revisions: int, llm: str,
                 revisions=revisions)
     except LLMGropError as exc:
         return Episode(error=str(exc).splitlines()[0])
+    return outcome(r)
+
+
+def outcome(r: RunResult) -> Episode:
+    """What the figures need of the run ``r``."""
     planned = r.planned
     rating = rate(arrangement_doc(r.final, physical=True),
                   requested=[p.name for p in planned.placements]).score
@@ -97,7 +104,7 @@ def episode(scene: Mapping[str, Any], seed: int, revisions: int, llm: str,
     outcomes = [v.outcome for v in planned.revisions]
     return Episode(r.success, rating, dropped, outcomes.count("accepted"),
                    outcomes.count("refused"), len(planned.llm.calls) if planned.llm else 0,
-                   r.planning_time_s)
+                   r.planning_time_s, execution_s=r.execution.execution_time_s)
 
 
 def report(label: str, eps: list[Episode]) -> None:
