@@ -98,6 +98,14 @@ STEPS: tuple[Step, ...] = (
        note="GROP over 100 seeds (about 3 minutes)"),
     _t("family-planning", ("**Planning time as the table grows**",),
        "python benchmarks/family_planning.py", note="about 1.5 minutes"),
+    _d("hard-scenes", ("**The hard-scene suite**",),
+       "python benchmarks/hard_scenes.py --seeds 10", note="the stand-in's rows"),
+    _d("hard-scenes-embedded", ("**The hard-scene suite**",),
+       "python benchmarks/hard_scenes.py --seeds 10 --llm embedded",
+       note="the embedded model's rows, run live (about 10 minutes)"),
+    _d("feedback-paper", ("**On the paper's tasks** (`benchmarks/feedback_paper.py`",),
+       "python benchmarks/feedback_paper.py", note="the embedded model live for what its "
+       "recording lacks (about 3 minutes)"),
     _d("family-mujoco", ("In MuJoCo (`family_table.py --simulator mujoco",),
        "python benchmarks/family_table.py --simulator mujoco --methods grop --capacities 1,4"
        " --seeds 10 --jobs 2", note="six diners in physics (about 30 minutes on 2 cores)"),

@@ -11,8 +11,10 @@ from typing import Any
 import jsonschema
 import pytest
 
+from cli_support import openai_flags
 from llm_grop import BackendOptions, Table, arrange, run
 from llm_grop.arrangement.sampling import violations
+from llm_grop.cli import main
 from llm_grop.contract.run_json import run_to_dict
 from llm_grop.contract.schemas import json_schema
 from llm_grop.contract.serialize import arrangement_to_dict
@@ -226,3 +228,15 @@ def test_a_diners_setting_that_does_not_fit_their_place_is_revised(chat_server) 
     assert {("mug", "to the right of", "dinner plate"),
             ("mug 2", "to the right of", "dinner plate 2")} <= keys
     assert not any(r.relation == "above" for r in result.arrangement.relations)
+
+
+def test_the_console_shows_each_round(chat_server, capsys) -> None:  # type: ignore[no-untyped-def]
+    chat_server.reply = answering([MUG_ABOVE], [MUG_RIGHT])
+    code = main(["arrange", MUG_REQUEST, *openai_flags(chat_server), "--table", "0.45x0.3",
+                 "--revisions", "2"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "Revision 1 (geometric): accepted, 1 relation(s) added, 1 dropped: Place the mug " \
+        "to the right of the dinner plate." in " ".join(out.split())
+    assert "told: the mug cannot be placed" in " ".join(out.split())
+    assert "llm, revision 1" in out
