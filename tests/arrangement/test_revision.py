@@ -46,10 +46,10 @@ def is_revision(prompt: str) -> bool:
     return "That answer cannot be used:" in prompt
 
 
-def answering(template1: Sequence[str], revisions: Sequence[str]
+def answering(template1: Sequence[str], revisions: Sequence[str], followup: str = ""
               ) -> Callable[[dict[str, Any]], str]:
     """Template 1 prompts get ``template1`` in turn, revision prompts ``revisions`` in turn
-    (the last of each repeats); distances are 3 cm."""
+    (the last of each repeats), follow-ups ``followup``; distances are 3 cm."""
     n = {"t1": 0, "rev": 0}
 
     def reply(body: dict[str, Any]) -> str:
@@ -57,7 +57,7 @@ def answering(template1: Sequence[str], revisions: Sequence[str]
         if "how many centimeters" in prompt.lower():
             return "About 3 centimeters."
         if "where should" in prompt.lower():
-            return ""
+            return followup
         key, answers = ("rev", revisions) if is_revision(prompt) else ("t1", template1)
         k = min(n[key], len(answers) - 1)
         n[key] += 1
@@ -108,6 +108,19 @@ def test_a_contradiction_is_explained_and_the_revision_used(chat_server) -> None
     assert [r["line"] for r in written["failure"]["relations"]] == \
         [r.line for r in rev.failure.relations]
     assert {r.get("revision") for r in doc["relations"]} == {None, 1}
+
+
+def test_an_object_a_revision_leaves_out_gets_a_follow_up(chat_server) -> None:
+    left_out = "\n".join(line for line in PAPER_CONSISTENT.splitlines() if "water cup" not in line)
+    chat_server.reply = answering([PAPER_CONFLICT], [left_out],
+                                  followup="Place the water cup above the fruit bowl.")
+    result = _arrange(chat_server, PAPER_REQUEST, seed=2)
+    (rev,) = result.revisions
+    assert rev.outcome == "accepted"
+    cup = [r for r in result.arrangement.relations if "water cup" in (r.subject, r.reference)]
+    assert [(r.key(), r.revision) for r in cup] == [(("water cup", "above", "fruit bowl"), 1)]
+    asked = [c for c in result.arrangement.llm.calls if "Where should" in c.prompt]
+    assert [c.seed for c in asked] == [int_seed(2, "llm.revision", 1, 1)]
 
 
 def test_a_revision_that_clashes_again_is_explained_in_turn(chat_server) -> None:

@@ -110,6 +110,8 @@ BAD = [
      "request: 600 characters; this server reads at most 500"),
     ("/v1/arrangements", {"request": "a " * 1001}, 422, "request: must be at most 2000 characters"),
     ("/v1/arrangements", {"request": REQUEST, "seed": -1}, 422, "seed: must be at least 0, got -1"),
+    ("/v1/arrangements", {"request": REQUEST, "revisions": 11}, 422,
+     "revisions: must be at most 10, got 11"),
     ("/v1/arrangements", {"request": REQUEST, "llm": "/etc/passwd"}, 422,
      "llm: '/etc/passwd' looks like a file path"),
     ("/v1/arrangements", {"request": REQUEST, "llm": "openai"}, 422,

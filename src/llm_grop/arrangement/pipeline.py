@@ -29,20 +29,20 @@ from llm_grop.arrangement import (
     revision,
     sampling,
 )
+from llm_grop.arrangement.answers import read_answer
 from llm_grop.arrangement.grounding import Grounding, ground, preview, stated_for
 from llm_grop.arrangement.layout import GuidedLayout
 from llm_grop.arrangement.options import ArrangeOptions
 from llm_grop.arrangement.revision import Feedback
 from llm_grop.arrangement.setting import Attempt, Sampled, Setting
 from llm_grop.errors import Infeasible, LLMAnswerUnusable, NoArrangement
-from llm_grop.language.answer_reader import parse_relations
 from llm_grop.llm.base import CallLog
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.failure import Revision
 from llm_grop.world.fidelity import Fidelity
 from llm_grop.world.llmlog import CallRecord, LLMSummary
-from llm_grop.world.relation import CENTER, Relation, dedupe
+from llm_grop.world.relation import Relation
 from llm_grop.world.request import Request
 from llm_grop.world.table import Table
 
@@ -74,15 +74,6 @@ class ArrangementResult:
     revisions: tuple[Revision, ...] = ()
 
 
-def _anchor_for(missing: str, items: Sequence[Item], rels: Sequence[Relation]) -> str:
-    """The object a follow-up asks about: the centre object, else the largest other item."""
-    for r in rels:
-        if r.relation == CENTER and r.subject != missing:
-            return r.subject
-    others = [it for it in items if it.name != missing]
-    return max(others, key=lambda it: it.spec.area).name
-
-
 def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: int,
                    attempt: int, options: ArrangeOptions) -> Attempt:
     kwargs = {} if options.examples is None else {"examples": options.examples}
@@ -92,23 +83,10 @@ def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: 
     params = replace(options.params, seed=s, temperature=max(temperature,
                                                                options.params.temperature))
     record = llm.complete(prompt, params, relations.template1_grammar(items))
-    parsed = parse_relations(record.response, items, catalog)
-    found = list(parsed.relations)
-    # Template 1 asks for one relation per pair; an ambiguous line ("beside") is none.
-    ignored = list(parsed.ignored) + [c.words for c in parsed.choices]
-    if len(items) > 1:
-        for k, missing in enumerate(parsed.missing):
-            anchor = _anchor_for(missing, items, found)
-            record = llm.complete(
-                relations.followup_prompt(missing, anchor),
-                options.params.with_seed(seeds.int_seed(seed, "llm.followup", attempt, k)),
-                relations.followup_grammar(missing, anchor))
-            answer = parse_relations(record.response, items, catalog)
-            found += [r for r in answer.relations if missing in (r.subject, r.reference)]
-            ignored += list(answer.ignored) + [c.words for c in answer.choices]
-    found = list(dedupe(found))
-    report = consistency.check(found)
-    return Attempt(s, tuple(found), report.conflict, tuple(ignored))
+    read = read_answer(record.response, items, llm, catalog, options.params,
+                       lambda k: seeds.int_seed(seed, "llm.followup", attempt, k))
+    report = consistency.check(read.relations)
+    return Attempt(s, read.relations, report.conflict, read.ignored)
 
 
 def _choose_relations(attempts: Sequence[Attempt]) -> tuple[tuple[Relation, ...], list[Relation]]:

@@ -15,13 +15,13 @@ from dataclasses import dataclass, field, replace
 
 from llm_grop import seeds
 from llm_grop.arrangement import consistency, relations
+from llm_grop.arrangement.answers import read_answer
 from llm_grop.errors import ReplayMissing
-from llm_grop.language.answer_reader import parse_relations
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.failure import Failure, Revision
-from llm_grop.world.relation import Relation, dedupe
+from llm_grop.world.relation import Relation
 
 
 def revision_prompt(items: Sequence[Item], proposed: Sequence[Relation], failure: Failure
@@ -95,8 +95,10 @@ class Feedback:
         except ReplayMissing:
             return self._refuse(k, failure, prompt, "", proposed, (),
                                 "the replayed recording has no answer to it")
-        parsed = parse_relations(answer, items, self.catalog)
-        revised = dedupe(parsed.relations)
+        # Read as Template 1's answer is: an object it leaves out gets a follow-up.
+        revised = read_answer(answer, items, self.llm, self.catalog, self.params,
+                              lambda j: seeds.int_seed(self.seed, "llm.revision", k, j + 1)
+                              ).relations
         if not revised:
             return self._refuse(k, failure, prompt, answer, proposed, (),
                                 "the answer held no usable relation")
