@@ -22,50 +22,27 @@ from collections.abc import Sequence
 
 from common import RECORDING, parse_args
 from hard_scenes import Episode, outcome
+from record_embedded import FillIn
 
 from llm_grop import BackendOptions, make_llm, run
-from llm_grop.errors import LLMGropError, ReplayMissing
-from llm_grop.llm.base import LLM, BaseLLM, SamplingParams
-from llm_grop.llm.record import LLMCallRecord
+from llm_grop.errors import LLMGropError
+from llm_grop.llm.base import LLM
 from llm_grop.llm.registry import create_llm
-from llm_grop.llm.replay import ReplayLLM
 
 
-class RecordedThenLive(BaseLLM):
-    """The embedded model's recorded answers, and ``live`` (the model itself) for a
-    prompt the recording lacks; ``live_calls`` counts those."""
-
-    backend = "recorded+live"
-
-    def __init__(self, recorded: ReplayLLM, live: LLM | None) -> None:
-        self.recorded, self.live = recorded.for_run(), live
-        self.model = recorded.model
-        self.live_calls = 0
-
-    def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
-                 ) -> LLMCallRecord:
-        try:
-            return self.recorded.complete(prompt, params, grammar)
-        except ReplayMissing:
-            if self.live is None:
-                raise
-            self.live_calls += 1
-            return self.live.complete(prompt, params, grammar)
-
-
-def task_runs(task: int, seeds: int, revisions: int, recorded: ReplayLLM,
-              live: LLM | None) -> tuple[list[Episode], int]:
+def task_runs(task: int, seeds: int, revisions: int, live: LLM | None
+              ) -> tuple[list[Episode], int]:
     """LLM-GROP on ``task`` for each seed; the episodes and the live LLM calls."""
     out, live_calls = [], 0
     for seed in range(seeds):
-        backend = RecordedThenLive(recorded, live)
+        backend = FillIn(RECORDING, live, write=False)
         try:
             r = run(task=task, seed=seed, chairs=1, method="llm-grop",
                     llm=make_llm(backend), revisions=revisions)
             out.append(outcome(r))
         except LLMGropError as exc:
             out.append(Episode(error=str(exc).splitlines()[0]))
-        live_calls += backend.live_calls
+        live_calls += backend.filled
     return out, live_calls
 
 
@@ -88,7 +65,6 @@ def main() -> None:
     args = parse_args(ap, {"seeds": 1, "tasks": "8", "no_live": True})
     first, _, last = args.tasks.partition("-")
     tasks = range(int(first), int(last or first) + 1)
-    recorded = ReplayLLM(BackendOptions(replay_path=RECORDING))
     live = None if args.no_live else create_llm("embedded", BackendOptions())
     print(f"LLM-GROP, tasks {args.tasks} x {args.seeds} seeds, 2D, 1 chair; LLM: the embedded "
           "model (SmolLM2-135M), its recorded answers"
@@ -98,12 +74,12 @@ def main() -> None:
     added_ms: list[float] = []
     # A first run warms the process up (imports, caches), so that no side's planning
     # time carries it.
-    task_runs(tasks[0], 1, 0, recorded, None)
+    task_runs(tasks[0], 1, 0, None)
     t0 = time.perf_counter()
     worse = []
     for task in tasks:
-        off, _ = task_runs(task, args.seeds, 0, recorded, live)
-        on, live_calls = task_runs(task, args.seeds, 2, recorded, live)
+        off, _ = task_runs(task, args.seeds, 0, live)
+        on, live_calls = task_runs(task, args.seeds, 2, live)
         print(f"task {task}: without the loop {summary(off)}; with it {summary(on)}; "
               f"rounds accepted {sum(e.accepted for e in on)}, refused "
               f"{sum(e.refused for e in on)}; live LLM calls {live_calls}", flush=True)

@@ -24,7 +24,7 @@ from common import RECORDING, parse_args, scratch
 
 from llm_grop import BackendOptions, arrange, make_llm
 from llm_grop.errors import LLMGropError, ReplayMissing
-from llm_grop.llm.base import BaseLLM, SamplingParams
+from llm_grop.llm.base import LLM, BaseLLM, SamplingParams
 from llm_grop.llm.record import LLMCallRecord, append_record
 from llm_grop.llm.registry import create_llm
 from llm_grop.llm.replay import ReplayLLM
@@ -32,16 +32,19 @@ from llm_grop.llm.replay import ReplayLLM
 
 class FillIn(BaseLLM):
     """Answers from a record file, and for a call the file lacks from the backend ``live``
-    (by default the embedded model), appending its answer to the file."""
+    (a name, by default the embedded model, or a backend; ``None``: none, the call stays
+    missing), appending its answer to the file unless ``write`` is false. ``filled``
+    counts the calls ``live`` answered."""
 
     backend = "embedded"
 
-    def __init__(self, path: Path, live: str = "embedded",
-                 options: BackendOptions | None = None) -> None:
-        self.path = path
+    def __init__(self, path: Path, live: str | LLM | None = "embedded",
+                 options: BackendOptions | None = None, *, write: bool = True) -> None:
+        self.path, self.write = path, write
         self.replay = ReplayLLM(BackendOptions(replay_path=str(path)))
         self.model = self.replay.model
-        self.live = create_llm(live, options or BackendOptions())
+        self.live = create_llm(live, options or BackendOptions()) if isinstance(live, str) \
+            else live
         self.filled = 0
 
     def complete(self, prompt: str, params: SamplingParams, grammar: str | None = None
@@ -49,8 +52,11 @@ class FillIn(BaseLLM):
         try:
             return self.replay.complete(prompt, params, grammar)
         except ReplayMissing:
+            if self.live is None:
+                raise
             record = self.live.complete(prompt, params, grammar)
-            append_record(self.path, record)
+            if self.write:
+                append_record(self.path, record)
             self.filled += 1
             return record
 
