@@ -1,10 +1,11 @@
 """The hard-scene suite of the feedback loop (issue 41): each scene's first arrangement
 fails (``data/hard_scenes.yaml``: a narrow table no placement of the usual relations fits,
-an answer that contradicts itself every time it is asked), run without the loop
+an answer that contradicts itself every time it is asked, a spot the arm cannot reach),
+run without the loop
 (``--revisions 0``, the paper's way) and with it (``--revisions 2``).
 
 Each scene is run end to end (``llm_grop.run``: arrange, plan, execute in 2D, LLM-GROP, one
-chair) for ``--seeds`` seeds. The LLM is
+chair unless the scene's ``settings`` say otherwise) for ``--seeds`` seeds. The LLM is
 
 * ``stand-in`` (default): a local OpenAI-compatible server on 127.0.0.1 that answers as the
   scene's ``stand_in`` says, as a capable model would: hand-written answers, not a model's
@@ -13,10 +14,10 @@ chair) for ``--seeds`` seeds. The LLM is
 
 Per scene and loop setting it prints the episodes with every object placed, the automatic
 rating of the final table (1-5, mean over the episodes that executed), the episodes that
-ended without a plan, the relations dropped to restore consistency, the rounds accepted and
-refused, the LLM calls per episode (median and maximum) and the planning time (median; LLM
-calls excluded). Then, per scene, the LLM calls and the planning time the loop added per
-episode (median and maximum over the seeds).
+ended without a plan, the objects left unplaced and why, the relations dropped to restore
+consistency, the rounds accepted and refused, the LLM calls per episode (median and
+maximum) and the planning time (median; LLM calls excluded). Then, per scene, the LLM calls
+and the planning time the loop added per episode (median and maximum over the seeds).
 Run: .venv/bin/python benchmarks/hard_scenes.py [--seeds 10] [--llm stand-in|embedded]
      [--quick]
 """
@@ -28,6 +29,7 @@ import math
 import statistics
 import sys
 import threading
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
 from http.server import ThreadingHTTPServer
@@ -65,6 +67,7 @@ class Episode:
     planning_s: float = math.nan
     error: str | None = None
     execution_s: float = math.nan
+    unplaced: tuple[str, ...] = ()
 
 
 def stand_in(scene: Mapping[str, Any]) -> Any:
@@ -87,9 +90,9 @@ def episode(scene: Mapping[str, Any], seed: int, revisions: int, llm: str,
     """One run of ``scene``."""
     opts = BackendOptions(base_url=url, api_key="stand-in", max_retries=0) if url else None
     try:
-        r = run(scene["request"], table=scene["table"], seed=seed, chairs=1,
+        r = run(scene["request"], table=scene["table"], seed=seed,
                 method="llm-grop", llm="openai" if url else llm, llm_options=opts,
-                revisions=revisions)
+                revisions=revisions, **({"chairs": 1} | scene.get("settings", {})))
     except LLMGropError as exc:
         return Episode(error=str(exc).splitlines()[0])
     return outcome(r)
@@ -104,7 +107,8 @@ def outcome(r: RunResult) -> Episode:
     outcomes = [v.outcome for v in planned.revisions]
     return Episode(r.success, rating, dropped, outcomes.count("accepted"),
                    outcomes.count("refused"), len(planned.llm.calls) if planned.llm else 0,
-                   r.planning_time_s, execution_s=r.execution.execution_time_s)
+                   r.planning_time_s, execution_s=r.execution.execution_time_s,
+                   unplaced=tuple(f"{n} {why}" for n, why in r.execution.unplaced_reasons))
 
 
 def report(label: str, eps: list[Episode]) -> None:
@@ -120,6 +124,9 @@ def report(label: str, eps: list[Episode]) -> None:
           + (f"median {statistics.median(calls):.0f}, max {max(calls)}" if calls else "-")
           + "; planning median "
           + (f"{1000 * statistics.median(e.planning_s for e in ran):.0f} ms" if ran else "-"))
+    lost = Counter(u for e in ran for u in e.unplaced)
+    if lost:
+        print("    unplaced: " + ", ".join(f"{k} {v}" for k, v in lost.most_common()))
     errors = sorted({e.error for e in eps if e.error})
     for e in errors[:2]:
         print(f"    {e[:160]}")

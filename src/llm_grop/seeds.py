@@ -16,6 +16,8 @@ stage                  what it seeds                                          pa
                        diner's edge of the table
 ``llm.reading``        the call that reads a whole request the catalog         0
                        matcher cannot read alone
+``llm.revision``       the feedback loop's k-th revision call, and its j-th    k (, j)
+                       follow-up (``k, j``, from 1)
 ``sampler``            the LLM-guided Gaussian rejection sampler (M configs;   diner
                        per diner when the table seats several)
 ``random_arrangement`` the baselines' random collision-free arrangement
@@ -27,6 +29,7 @@ stage                  what it seeds                                          pa
 ``ratings.order``      a human rater's order of a study's pictures            rater
 ``bootstrap``          the resamples of a paired comparison's confidence      pair
                        interval (a bench's summary, a human report)
+``rescue``             the spots drawn for an object the feedback loop moves
 ====================== ====================================================== ==========
 
 OMPL takes its seed through a process-wide setting; the planner sets it, from the ``ompl``
@@ -59,6 +62,7 @@ STAGES: dict[str, int] = {
     "bootstrap": 19,
     "llm.reading": 20,
     "llm.revision": 21,
+    "rescue": 22,
 }
 
 

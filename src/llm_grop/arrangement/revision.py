@@ -57,6 +57,30 @@ def geometric_failure(objects: Sequence[str], why: str, proposed: Sequence[Relat
                    + (f" (relations: {said})" if said else ""), tuple(objects), involved)
 
 
+#: What each reason the executive gives an object up for means, told to the LLM.
+_PHYSICAL = {
+    "no_ik": "the arm could not reach that spot from anywhere the robot could stand",
+    "blocked": "the robot could not drive to a place beside the table from which to reach "
+               "that spot",
+    "contact": "the arm bumped into something each time it reached for that spot",
+}
+
+
+def physical_failure(name: str, reason: str, x_m: float, y_m: float,
+                     proposed: Sequence[Relation], where: str) -> Failure:
+    """The failure of a place the robot could not carry out: ``name`` at ``(x_m, y_m)``
+    (table frame, metres) on ``where``, given up for ``reason`` (the executive's closed
+    list); the other objects are already on the table."""
+    involved = tuple(r for r in proposed if name in (r.subject, r.reference))
+    why = _PHYSICAL.get(reason, f"each attempt failed ({reason.replace('_', ' ')})")
+    said = "; ".join(repr(r.sentence()) for r in involved)
+    return Failure("physical", f"the robot could not put the {name} where these relations put "
+                               f"it on {where}, {x_m:+.2f} m right and {y_m:+.2f} m away from "
+                               f"the table's centre: {why}. The other objects are already on "
+                               f"the table and stay where they are"
+                   + (f" (relations: {said})" if said else ""), (name,), involved)
+
+
 @dataclass
 class Feedback:
     """The feedback loop's state for one run: the LLM it asks, how it asks, the rounds

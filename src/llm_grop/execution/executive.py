@@ -48,6 +48,7 @@ from llm_grop.execution.judge import (
 )
 from llm_grop.execution.manipulation import pick, place
 from llm_grop.execution.policy import BASELINE_MANIP_ATTEMPTS, ExecutionPolicy
+from llm_grop.execution.rescue import Rescue
 from llm_grop.execution.tray import load, unload
 from llm_grop.execution.trips import Carry, Trip, plan_trips, split_trip
 from llm_grop.recording.stream import BodyPose, EpisodeObserver
@@ -62,26 +63,30 @@ log = logging.getLogger(__name__)
 def execute(simulator: Simulator, plan: Plan, scene: Scene, items: Sequence[Item],
             rng: np.random.Generator, *, replan: PathPlanner,
             policy: ExecutionPolicy | None = None,
-            observer: EpisodeObserver | None = None) -> Execution:
+            observer: EpisodeObserver | None = None,
+            rescue: Rescue | None = None) -> Execution:
     """Run ``plan`` for ``items`` in a new episode of ``simulator`` in ``scene`` (its chairs
     are the true ones), the simulator's randomness from ``rng``; ``replan`` is the robot's
     own path planner. ``observer`` hears every attempt and where everything is after it,
-    and, while attempts run, what the simulator declares it reports (its ``streams``)."""
+    and, while attempts run, what the simulator declares it reports (its ``streams``).
+    ``rescue`` is asked for another spot before an object still in the hand is given up."""
     session = simulator.session(scene, items, rng, replan=replan)
     if observer is not None and simulator.streams:
         # Declared by the class: its sessions take an observer.
         cast(ObservedSession, session).watch(observer)
-    return execute_plan(plan, session, scene, policy, observer)
+    return execute_plan(plan, session, scene, policy, observer, rescue)
 
 
 def execute_plan(plan: Plan, session: Session, scene: Scene,
                  policy: ExecutionPolicy | None = None,
-                 observer: EpisodeObserver | None = None) -> Execution:
+                 observer: EpisodeObserver | None = None,
+                 rescue: Rescue | None = None) -> Execution:
     """Run ``plan`` on ``session`` (an episode in ``scene``) under ``policy`` and report
     what physically happened (each attempt also to ``observer``); the session is closed
-    at the end."""
+    at the end. ``rescue``: see :func:`execute`."""
     try:
-        return _Executive(plan, session, scene, policy or ExecutionPolicy(), observer).run()
+        return _Executive(plan, session, scene, policy or ExecutionPolicy(), observer,
+                          rescue).run()
     finally:
         session.close()
 
@@ -91,8 +96,10 @@ class _Executive:
     settled, and the attempts each object has left."""
 
     def __init__(self, plan: Plan, session: Session, scene: Scene,
-                 policy: ExecutionPolicy, observer: EpisodeObserver | None = None) -> None:
+                 policy: ExecutionPolicy, observer: EpisodeObserver | None = None,
+                 rescue: Rescue | None = None) -> None:
         self.plan, self.s, self.scene, self.observer = plan, session, scene, observer
+        self.rescue = rescue
         self.policy = policy.for_method(BASELINE_MANIP_ATTEMPTS)
         self.targets = {p.name: p for p in plan.configuration}
         self.steps: list[ExecutedStep] = []
@@ -180,8 +187,8 @@ class _Executive:
             if not self.go_leg(leg, leg.path if planned_path else ()):
                 self.give_up(name, self._last_reason(name, "blocked"))
             self._between(name, False)
-            if name in self.given_up:
-                return
+            if name in self.given_up or name in self.placed:
+                return  # given up, or placed elsewhere by a rescue
         if self.s.objects()[name].tray:
             why = unload(self, name)
             if why is not None:
@@ -318,7 +325,11 @@ class _Executive:
 
     # -- bookkeeping ------------------------------------------------------------------
     def give_up(self, name: str, reason: Reason) -> None:
-        """Stop working on ``name``: put it down away from the table if it is in hand."""
+        """Stop working on ``name``: put it down away from the table if it is in hand;
+        unless, while the hand holds it, the rescue gives it another spot, where it is
+        placed instead."""
+        if self._rescued(name, reason):
+            return
         self.given_up[name] = reason
         if self.s.objects()[name].held:
             spent = self.s.release(name)
@@ -330,6 +341,29 @@ class _Executive:
                                                duration_s=round(last.duration_s + spent, 6))
             self.check_placed(name)
         log.debug("gave up %s: %s", name, reason)
+
+    def _rescued(self, name: str, reason: Reason) -> bool:
+        """Whether the rescue gave the held ``name`` another spot; it is then driven to
+        and placed there, with the place attempts of a fresh target (a failure there is
+        given up, or rescued again, in turn)."""
+        state = self.s.objects()[name]
+        if self.rescue is None or not state.held or state.tray:
+            return False
+        leg = self.place_legs.get(name)
+        tried = () if leg is None or leg.goal is None else (leg.goal, *leg.alternatives)
+        spot = self.rescue(name, reason, self.s.objects(), self.s.robot_pose(), tried)
+        if spot is None:
+            return False
+        log.debug("rescued %s (%s): a new target at %+.2f, %+.2f", name, reason,
+                  spot.target.x, spot.target.y)
+        self.targets[name] = spot.target
+        self.used.pop((name, "place"), None)
+        self.place_legs[name] = spot.leg
+        if self.go_leg(spot.leg):
+            place(self, name)
+        else:
+            self.give_up(name, self._last_reason(name, "blocked"))
+        return True
 
     def _last_reason(self, name: str, default: Reason) -> Reason:
         """Why the last failed attempt on ``name`` failed (``default``: none says)."""

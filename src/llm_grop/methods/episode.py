@@ -12,8 +12,10 @@ from dataclasses import dataclass, replace
 
 from llm_grop import seeds
 from llm_grop.arrangement.diners import violations_at_table
+from llm_grop.arrangement.revision import Feedback
 from llm_grop.execution import ExecutionPolicy, execute
 from llm_grop.methods.base import EpisodeInput, Method
+from llm_grop.methods.rescue import Rescuer, rescuer
 from llm_grop.planning.feasibility import FeasibilityModel, feasibility_profile
 from llm_grop.planning.grop import build_plan
 from llm_grop.planning.navigation import Navigator
@@ -90,19 +92,50 @@ def execute_episode(planned: PlannedEpisode, inp: EpisodeInput, *, task: int | N
             scene, tuple(ObjectShape.of_item(i) for i in inp.items), plan,
             planned.arrangement.relations, method, task, inp.seed, inp.request,
             simulator.name, planned.feasibility, simulator.streams))
+    rescue = _rescuer(planned, inp, planner)
+    asked = len(inp.llm.calls) if inp.llm is not None else 0
     execution = execute(simulator, plan, scene, inp.items, seeds.stream(inp.seed, "simulator"),
                         replan=navigator(scene, planner),
                         policy=(policy or ExecutionPolicy()).for_method(attempts),
-                        observer=observer)
+                        observer=observer, rescue=rescue)
     if observer is not None:
         observer.end(execution.execution_time_s, EpisodeEnd(
             execution.success, execution.execution_time_s, execution.unplaced_reasons))
     arranged = replace(planned.arrangement, placements=plan.configuration)
+    if rescue is not None and len(rescue.feedback.done) > len(arranged.revisions):
+        arranged = _rescued(arranged, rescue, inp, asked)
     return RunResult(method=method, task=task, seed=inp.seed, request=inp.request,
                      planned=arranged, plan=plan, execution=execution,
                      final=final_arrangement(arranged, execution),
                      planning_time_s=planned.planning_time_s, scene=scene,
                      simulator=simulator.name, feasibility=planned.feasibility)
+
+
+def _rescuer(planned: PlannedEpisode, inp: EpisodeInput, planner: GropOptions | None
+             ) -> Rescuer | None:
+    """The feedback loop's rescue for the executive, when the arrangement came from the LLM
+    and rounds are left (``revisions``); ``None`` otherwise."""
+    a = planned.arrangement
+    if inp.llm is None or inp.options.revisions <= len(a.revisions):
+        return None
+    feedback = Feedback(inp.llm, inp.catalog, inp.seed, inp.options.params,
+                        inp.options.revisions, lambda m: _say(inp, m), list(a.revisions))
+    return rescuer(feedback, inp.items, a.relations, planned.plan.configuration, a.table,
+                   planned.scene, feasibility_profile(planned.feasibility),
+                   planner or GropOptions(), inp.seed)
+
+
+def _rescued(arranged: Arrangement, rescue: Rescuer, inp: EpisodeInput, asked: int
+             ) -> Arrangement:
+    """``arranged`` as the rescue left it: its relations, targets, rounds, warnings and
+    the LLM calls the rounds made (those of ``inp.llm`` from the ``asked``-th on)."""
+    llm = arranged.llm
+    if llm is not None and inp.llm is not None:
+        llm = replace(llm, calls=llm.calls + tuple(inp.llm.calls[asked:]))
+    return replace(arranged, relations=tuple(rescue.relations),
+                   placements=tuple(rescue.targets[p.name] for p in arranged.placements),
+                   revisions=tuple(rescue.feedback.done),
+                   warnings=arranged.warnings + tuple(rescue.feedback.warnings), llm=llm)
 
 
 def _say(inp: EpisodeInput, message: str) -> None:
