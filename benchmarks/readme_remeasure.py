@@ -103,7 +103,8 @@ STEPS: tuple[Step, ...] = (
     _d("hard-scenes-embedded", ("**The hard-scene suite**",),
        "python benchmarks/hard_scenes.py --seeds 10 --llm embedded",
        note="the embedded model's rows, run live (about 10 minutes)"),
-    _d("feedback-paper", ("**On the paper's tasks** (`benchmarks/feedback_paper.py`",),
+    _d("feedback-paper", ("**On the paper's tasks** (`benchmarks/feedback_paper.py`",
+                          "In the same runs (`feedback_paper.py`"),
        "python benchmarks/feedback_paper.py", note="the embedded model live for what its "
        "recording lacks (about 3 minutes)"),
     _d("family-mujoco", ("In MuJoCo (`family_table.py --simulator mujoco",),
