@@ -107,6 +107,9 @@ STEPS: tuple[Step, ...] = (
                           "In the same runs (`feedback_paper.py`"),
        "python benchmarks/feedback_paper.py", note="the embedded model live for what its "
        "recording lacks (about 3 minutes)"),
+    _d("feedback-paper-stand-in", ("A local server answering as a capable model would "
+                                   "(`feedback_paper.py --llm stand-in`",),
+       "python benchmarks/feedback_paper.py --llm stand-in", note="about 1 minute"),
     _d("family-mujoco", ("In MuJoCo (`family_table.py --simulator mujoco",),
        "python benchmarks/family_table.py --simulator mujoco --methods grop --capacities 1,4"
        " --seeds 10 --jobs 2", note="six diners in physics (about 30 minutes on 2 cores)"),
