@@ -12,8 +12,11 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator, Mapping, Sequence
+from http.server import ThreadingHTTPServer
 from pathlib import Path
+from typing import Any
 
 from llm_grop import make_llm
 from llm_grop.llm.base import BackendOptions, CallLog
@@ -62,6 +65,29 @@ def parse_args(parser: argparse.ArgumentParser, quick: Mapping[str, object] | No
         parser.set_defaults(**{k: v() if callable(v) else v for k, v in quick.items()})
         args = parser.parse_args(argv)
     return args
+
+
+def span(text: str) -> list[int]:
+    """``"1-3,5"`` -> ``[1, 2, 3, 5]``; :class:`ValueError` for anything else."""
+    out: list[int] = []
+    for part in text.split(","):
+        lo, _, hi = part.partition("-")
+        out += range(int(lo), int(hi or lo) + 1)
+    return out
+
+
+def chat_server() -> tuple[Any, Any]:
+    """The tests' local OpenAI-compatible chat server (``tests/conftest.py``), started on
+    127.0.0.1: its state (set ``reply``; ``url`` is its ``/v1`` base URL) and the HTTP
+    server (``shutdown()`` stops it)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from conftest import ChatServer, _handler
+
+    state = ChatServer()
+    httpd = ThreadingHTTPServer(("127.0.0.1", 0), _handler(state))
+    state.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
+    threading.Thread(target=httpd.serve_forever, args=(0.02,), daemon=True).start()
+    return state, httpd
 
 
 def scratch(name: str) -> Path:

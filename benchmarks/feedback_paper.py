@@ -25,18 +25,15 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import threading
 import time
 from collections.abc import Callable, Sequence
-from http.server import ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
 
-from common import RECORDING, parse_args
-from hard_scenes import Episode, outcome
+from common import RECORDING, chat_server, parse_args, span
+from hard_scenes import Episode, outcome, stand_in
 from record_embedded import FillIn
 
-from conftest import ChatServer, _handler
 from llm_grop import BackendOptions, make_llm, run
 from llm_grop.api import resolve_items
 from llm_grop.arrangement.preferences import load_preference_file
@@ -47,14 +44,6 @@ from llm_grop.llm.registry import create_llm
 from llm_grop.world.catalog import Catalog
 
 DATA = Path(__file__).parent / "data"
-
-
-def stand_in(answer: str) -> Callable[[dict[str, Any]], str]:
-    """The stand-in's replies: 3 cm to every distance question, ``answer`` to the rest."""
-    def reply(body: dict[str, Any]) -> str:
-        prompt = body["messages"][-1]["content"]
-        return "About 3 centimeters." if "centimeters" in prompt.lower() else answer
-    return reply
 
 
 #: A fresh backend for one run, and how many of its calls a live model answered.
@@ -78,6 +67,12 @@ def stand_in_answer(task: int) -> str:
     lines = [r.sentence() for sentence in pool
              for r in parse_relations(sentence, items, catalog).relations]
     return "\n".join(dict.fromkeys(lines))
+
+
+def said(answer: str) -> dict[str, Any]:
+    """A scene whose ``stand_in`` (as a hard scene's) says ``answer`` to Template 1 and
+    again to a revision prompt, and 3 cm to every distance."""
+    return {"stand_in": {"first": answer, "revised": answer, "distance_cm": 3}}
 
 
 def task_runs(task: int, seeds: int, revisions: int, fresh: Fresh
@@ -114,13 +109,12 @@ def main() -> None:
     ap.add_argument("--no-live", action="store_true",
                     help="no embedded model: revision rounds are refused")
     args = parse_args(ap, {"seeds": 1, "tasks": "8", "no_live": True})
-    first, _, last = args.tasks.partition("-")
-    tasks = range(int(first), int(last or first) + 1)
+    try:
+        tasks = span(args.tasks)
+    except ValueError:
+        ap.error(f"--tasks: expected tasks such as 1-8 or 1,3,5, got {args.tasks!r}")
     if args.llm == "stand-in":
-        state = ChatServer()
-        httpd = ThreadingHTTPServer(("127.0.0.1", 0), _handler(state))
-        state.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
-        threading.Thread(target=httpd.serve_forever, args=(0.02,), daemon=True).start()
+        state, _ = chat_server()
         options = BackendOptions(base_url=state.url, api_key="stand-in", max_retries=0)
         fresh: Fresh = lambda: (create_llm("openai", options), lambda: 0)  # noqa: E731
         print(f"LLM-GROP, tasks {args.tasks} x {args.seeds} seeds, 2D, 1 chair; LLM: a local "
@@ -138,13 +132,13 @@ def main() -> None:
     # A first run warms the process up (imports, caches), so that no side's planning
     # time carries it.
     if args.llm == "stand-in":
-        state.reply = stand_in(stand_in_answer(tasks[0]))
+        state.reply = stand_in(said(stand_in_answer(tasks[0])))
     task_runs(tasks[0], 1, 0, fresh if args.llm == "stand-in" else recorded(None))
     t0 = time.perf_counter()
     worse = []
     for task in tasks:
         if args.llm == "stand-in":
-            state.reply = stand_in(stand_in_answer(task))
+            state.reply = stand_in(said(stand_in_answer(task)))
         off, _ = task_runs(task, args.seeds, 0, fresh)
         on, live_calls = task_runs(task, args.seeds, 2, fresh)
         print(f"task {task}: without the loop {summary(off)}; with it {summary(on)}; "

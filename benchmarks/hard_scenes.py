@@ -27,28 +27,20 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
-import sys
-import threading
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
-from http.server import ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
 
 import yaml
+from common import chat_server, parse_args
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from common import parse_args  # noqa: E402
-
-from conftest import ChatServer, _handler  # noqa: E402
-from llm_grop import BackendOptions, run  # noqa: E402
-from llm_grop.contract.serialize import arrangement_doc  # noqa: E402
-from llm_grop.errors import LLMGropError  # noqa: E402
-from llm_grop.evaluation.rater import rate  # noqa: E402
-from llm_grop.world.plan import RunResult  # noqa: E402
+from llm_grop import BackendOptions, run
+from llm_grop.contract.serialize import arrangement_doc
+from llm_grop.errors import LLMGropError
+from llm_grop.evaluation.rater import rate
+from llm_grop.world.plan import RunResult
 
 SCENES = Path(__file__).parent / "data" / "hard_scenes.yaml"
 LOOP = {"without the loop (--revisions 0)": 0, "with the loop (--revisions 2)": 2}
@@ -138,10 +130,7 @@ def main() -> None:
     ap.add_argument("--llm", default="stand-in", choices=("stand-in", "embedded"))
     args = parse_args(ap, {"seeds": 1})
     scenes = yaml.safe_load(SCENES.read_text(encoding="utf-8"))["scenes"]
-    state = ChatServer()
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), _handler(state))
-    state.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
-    threading.Thread(target=httpd.serve_forever, args=(0.02,), daemon=True).start()
+    state, httpd = chat_server()
     who = ("a local server answering as a capable model would (the scenes' stand_in: "
            "hand-written answers, not a model's output)" if args.llm == "stand-in"
            else "the embedded model (SmolLM2-135M), run live")

@@ -29,10 +29,8 @@ from __future__ import annotations
 
 import argparse
 import sys
-import threading
 import time
 from collections import Counter
-from http.server import ThreadingHTTPServer
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -41,10 +39,9 @@ RECORDED = ROOT / "benchmarks" / "data" / "phrasings_embedded.jsonl"
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "tests" / "language"))
 
-from common import median_p95, parse_args  # noqa: E402
+from common import chat_server, median_p95, parse_args  # noqa: E402
 from corpus import Case, as_answer, load_cases, load_refusals, same  # noqa: E402
 
-from conftest import ChatServer, _handler  # noqa: E402
 from llm_grop import BackendOptions, make_llm  # noqa: E402
 from llm_grop.errors import LLMGropError  # noqa: E402
 from llm_grop.language.llm_reading import answer_of  # noqa: E402
@@ -78,18 +75,9 @@ def fast_path(cases: list[Case], catalog: Catalog) -> Counter[str]:
     return out
 
 
-def server() -> tuple[ChatServer, ThreadingHTTPServer]:
-    """A local OpenAI-compatible chat server (the tests' own), started."""
-    state = ChatServer()
-    httpd = ThreadingHTTPServer(("127.0.0.1", 0), _handler(state))
-    state.url = f"http://127.0.0.1:{httpd.server_address[1]}/v1"
-    threading.Thread(target=httpd.serve_forever, args=(0.02,), daemon=True).start()
-    return state, httpd
-
-
 def answered(cases: list[Case], catalog: Catalog) -> Counter[str]:
     """(b): the LLM path on every phrasing, the server answering its expected reading."""
-    state, httpd = server()
+    state, httpd = chat_server()
     log = CallLog(OpenAILLM(BackendOptions(base_url=state.url, max_retries=0)))
     out = Counter[str]()
     for case in cases:

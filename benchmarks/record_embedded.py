@@ -20,7 +20,7 @@ import json
 import time
 from pathlib import Path
 
-from common import RECORDING, parse_args, scratch
+from common import RECORDING, parse_args, scratch, span
 
 from llm_grop import BackendOptions, arrange, make_llm
 from llm_grop.errors import LLMGropError, ReplayMissing
@@ -61,15 +61,6 @@ class FillIn(BaseLLM):
             return record
 
 
-def _span(text: str) -> list[int]:
-    """``"1-3,5"`` -> ``[1, 2, 3, 5]``."""
-    out: list[int] = []
-    for part in text.split(","):
-        lo, _, hi = part.partition("-")
-        out += range(int(lo), int(hi or lo) + 1)
-    return out
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", default="1-8")
@@ -95,8 +86,8 @@ def fill(tasks: str, seeds: str, out: Path, backend: str, options: BackendOption
     """Every task and seed again, answered from ``out`` and by ``backend`` for a call ``out``
     lacks (appended to it)."""
     filler = FillIn(out, backend, options)
-    for task in _span(tasks):
-        for seed in _span(seeds):
+    for task in span(tasks):
+        for seed in span(seeds):
             try:
                 arrange(task=task, llm=make_llm(filler), seed=seed)
             except LLMGropError as exc:
@@ -110,8 +101,8 @@ def record(tasks: str, seeds: str, out: Path, backend: str, options: BackendOpti
     done_file = out.with_suffix(".done")
     done = set(done_file.read_text().split()) if done_file.exists() else set()
     llm = make_llm(backend, options, record=out)
-    for task in _span(tasks):
-        for seed in _span(seeds):
+    for task in span(tasks):
+        for seed in span(seeds):
             key = f"{task}:{seed}"
             if key in done:
                 continue

@@ -60,7 +60,7 @@ class ArrangementResult:
     them (the planner chooses among these); ``dropped`` the LLM lines left out
     to restore consistency; ``gaps_m`` the stated gaps by relation key; ``edge_gap_m``
     the origin's stated distance from the diner's edge; ``fidelity`` one measure per
-    configuration; ``revisions`` the feedback loop's rounds.
+    configuration.
     """
 
     arrangement: Arrangement
@@ -71,7 +71,11 @@ class ArrangementResult:
     gaps_m: dict[tuple[str, str, str | None], float]
     edge_gap_m: float | None = None
     fidelity: tuple[Fidelity, ...] = ()
-    revisions: tuple[Revision, ...] = ()
+
+    @property
+    def revisions(self) -> tuple[Revision, ...]:
+        """The feedback loop's rounds (the arrangement's)."""
+        return self.arrangement.revisions
 
 
 def _ask_relations(items: Sequence[Item], llm: CallLog, catalog: Catalog, seed: int,
@@ -310,4 +314,4 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
         origins=tuple((it.name, it.source, it.words) for it in items),
         revisions=tuple(feedback.done))
     return ArrangementResult(arrangement, tuple(configs), layout, attempts, dropped, gaps,
-                             edge_gap, tuple(measured), tuple(feedback.done))
+                             edge_gap, tuple(measured))

@@ -98,7 +98,9 @@ class Rescuer:
         return spot
 
     def context(self, name: str) -> PlanningContext:
-        """The planner's view of the room for ``name`` (standing positions and belief)."""
+        """The planner's view of the room: its standing positions round the target table,
+        their chances under the belief and the drives between them (made for ``name`` the
+        first time; none of that depends on the object)."""
         if self._ctx is None:
             item = next(it for it in self.items if it.name == name)
             self._ctx = PlanningContext(self.scene, (item,), self.belief, self.planner)
