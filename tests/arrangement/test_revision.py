@@ -13,6 +13,7 @@ import pytest
 
 from cli_support import openai_flags
 from llm_grop import BackendOptions, Table, arrange, run
+from llm_grop.arrangement.revision import BUNDLED_MODEL, DEFAULT_ROUNDS, rounds_for
 from llm_grop.arrangement.sampling import violations
 from llm_grop.cli import main
 from llm_grop.contract.run_json import run_to_dict
@@ -94,11 +95,12 @@ def test_a_contradiction_is_explained_and_the_revision_used(chat_server) -> None
     assert revision_call.seed == int_seed(4, "llm.revision", 1)
     a = result.arrangement
     from_revision = {r.key() for r in a.relations if r.revision == 1}
+    assert {r.source for r in a.relations if r.revision == 1} == {"revision"}
     assert from_revision == {r.key() for r in rev.added} and from_revision
     proposed = result.attempts[0].relations
     said = {r.key() for r in proposed} | {r.converse().key() for r in proposed if r.reference}
     assert {r.key() for r in a.relations if r.revision is None} <= said
-    assert {r.source for r in a.relations} == {"llm"}
+    assert {r.source for r in a.relations if r.revision is None} == {"llm"}
     for config in result.configurations:
         assert violations(config, a.relations, a.table) == []
     doc = arrangement_to_dict(a)
@@ -252,4 +254,39 @@ def test_the_console_shows_each_round(chat_server, capsys) -> None:  # type: ign
     assert "Revision 1 (geometric): accepted, 1 relation(s) added, 1 dropped: Place the mug " \
         "to the right of the dinner plate." in " ".join(out.split())
     assert "told: the mug cannot be placed" in " ".join(out.split())
-    assert "llm, revision 1" in out
+    assert "revision 1" in out and "llm, revision" not in out
+
+
+def _default(server, request: str, **kwargs):  # type: ignore[no-untyped-def]
+    """``arrange`` against ``server`` with ``revisions`` left to its default."""
+    opts = BackendOptions(base_url=server.url, api_key="test", max_retries=0, **kwargs)
+    return arrange(request, llm="openai", llm_options=opts)
+
+
+def test_by_default_a_capable_model_is_told_what_clashed(chat_server) -> None:
+    chat_server.reply = answering([PAPER_CONFLICT], [PAPER_CONSISTENT])
+    result = _default(chat_server, PAPER_REQUEST)
+    assert [r.outcome for r in result.revisions] == ["accepted"]
+
+
+def test_by_default_the_bundled_model_is_asked_again_blindly(chat_server, tmp_path: Path
+                                                            ) -> None:
+    """The bundled SmolLM2-135M's revisions measured worse than a blind re-prompt: without
+    ``revisions`` its runs, live or replayed, keep the paper's way."""
+    chat_server.reply = answering([PAPER_CONFLICT, PAPER_CONSISTENT], [PAPER_CONSISTENT])
+    record = tmp_path / "calls.jsonl"
+    opts = BackendOptions(base_url=chat_server.url, api_key="test", max_retries=0,
+                          model=BUNDLED_MODEL)
+    live = arrange(PAPER_REQUEST, llm="openai", llm_options=opts, record=record)
+    assert live.revisions == () and not any(is_revision(p) for p in _prompts(chat_server))
+    again = arrange(PAPER_REQUEST, llm="replay", llm_options=BackendOptions(replay_path=record))
+    assert again.revisions == ()
+    assert again.arrangement.relations == live.arrangement.relations
+    assert again.arrangement.placements == live.arrangement.placements
+
+
+@pytest.mark.parametrize(("revisions", "model", "rounds"), [
+    (None, BUNDLED_MODEL, 0), (None, "qwen2.5:7b", DEFAULT_ROUNDS), (1, BUNDLED_MODEL, 1),
+    (0, "qwen2.5:7b", 0)])
+def test_the_rounds_a_run_may_spend(revisions: int | None, model: str, rounds: int) -> None:
+    assert rounds_for(revisions, model) == rounds

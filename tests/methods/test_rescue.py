@@ -199,6 +199,23 @@ def test_the_paper_way_gives_the_knife_up(chat_server) -> None:
     opts = BackendOptions(base_url=chat_server.url, api_key="t", max_retries=0)
     result = run("a dinner plate, a dinner fork and a dinner knife", llm="openai",
                  llm_options=opts, scene=two_table_room(), chairs=0, seed=1,
-                 simulator=_Scripted())
+                 simulator=_Scripted(), revisions=0)
     assert not result.success and result.execution.unplaced == ("dinner knife",)
     assert result.planned.revisions == ()
+
+
+def test_by_default_a_capable_model_is_told(chat_server) -> None:
+    """Without ``revisions``, a model other than the bundled one gets the loop's 2 rounds:
+    here it repeats itself, so the round is refused and the knife still given up."""
+    chat_server.reply = lambda body: (
+        "About 3 centimeters." if "centimeters" in body["messages"][-1]["content"] else
+        "Place the dinner plate in the center of the table.\n"
+        "Place the dinner fork to the left of the dinner plate.\n"
+        "Place the dinner knife to the right of the dinner plate.")
+    opts = BackendOptions(base_url=chat_server.url, api_key="t", max_retries=0)
+    result = run("a dinner plate, a dinner fork and a dinner knife", llm="openai",
+                 llm_options=opts, scene=two_table_room(), chairs=0, seed=1,
+                 simulator=_Scripted())
+    assert [(r.failure.kind, r.outcome) for r in result.planned.revisions] == [
+        ("physical", "refused")]
+    assert result.execution.unplaced == ("dinner knife",)

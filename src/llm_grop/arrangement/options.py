@@ -27,7 +27,8 @@ class ArrangeOptions:
     preferences' precedence. ``choices``: the ambiguous ones ("the knife beside the plate"),
     decided by the LLM's relations or clingo (:func:`~llm_grop.arrangement.consistency.choose`).
     ``revisions``: rounds of the feedback loop (:mod:`llm_grop.arrangement.revision`) per
-    run; 0 re-prompts blindly on a contradiction, as the paper does.
+    run; 0 re-prompts blindly on a contradiction, as the paper does; ``None``: as
+    :func:`~llm_grop.arrangement.revision.rounds_for` says for the run's model.
     """
 
     m: int = DEFAULTS.m
@@ -41,4 +42,4 @@ class ArrangeOptions:
     gap_tolerance_m: float | None = fidelity.GAP_TOLERANCE_M
     stated: tuple[Relation, ...] = ()
     choices: tuple[Choice, ...] = ()
-    revisions: int = DEFAULTS.revisions
+    revisions: int | None = DEFAULTS.revisions

@@ -33,7 +33,7 @@ from llm_grop.arrangement.answers import read_answer
 from llm_grop.arrangement.grounding import Grounding, ground, preview, stated_for
 from llm_grop.arrangement.layout import GuidedLayout
 from llm_grop.arrangement.options import ArrangeOptions
-from llm_grop.arrangement.revision import Feedback
+from llm_grop.arrangement.revision import Feedback, rounds_for
 from llm_grop.arrangement.setting import Attempt, Sampled, Setting
 from llm_grop.errors import Infeasible, LLMAnswerUnusable, NoArrangement
 from llm_grop.llm.base import CallLog
@@ -272,7 +272,8 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
 
     first_call = len(llm.calls)
     g = Grounding(llm, catalog, seed, options, say)
-    feedback = Feedback(llm, catalog, seed, options.params, options.revisions, say)
+    feedback = Feedback(llm, catalog, seed, options.params,
+                        rounds_for(options.revisions, llm.model), say)
 
     def revise(its: Sequence[Item], st: Setting, box: Table, exc: NoArrangement
                ) -> Setting | None:

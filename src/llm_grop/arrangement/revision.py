@@ -18,10 +18,24 @@ from llm_grop.arrangement import consistency, relations
 from llm_grop.arrangement.answers import read_answer
 from llm_grop.errors import ReplayMissing
 from llm_grop.llm.base import CallLog, SamplingParams
+from llm_grop.llm.embedded import DEFAULT_MODEL as BUNDLED_MODEL
 from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.failure import Failure, Revision
 from llm_grop.world.relation import Relation
+
+#: Rounds per run when ``--revisions`` is not given, with a model other than the bundled one.
+DEFAULT_ROUNDS = 2
+
+
+def rounds_for(revisions: int | None, model: str) -> int:
+    """The rounds a run may spend: ``revisions`` when given; else :data:`DEFAULT_ROUNDS`,
+    or 0 when ``model`` is the bundled SmolLM2-135M, live or replayed. Told what failed,
+    that small model answered worse than when asked again blindly: on the paper's tasks 5
+    and 7 its revisions lowered the rating (``benchmarks/feedback_paper.py``)."""
+    if revisions is not None:
+        return revisions
+    return 0 if model == BUNDLED_MODEL else DEFAULT_ROUNDS
 
 
 def revision_prompt(items: Sequence[Item], proposed: Sequence[Relation], failure: Failure
@@ -85,7 +99,8 @@ def physical_failure(name: str, reason: str, x_m: float, y_m: float,
 class Feedback:
     """The feedback loop's state for one run: the LLM it asks, how it asks, the rounds
     it may still spend and the record of each round. ``rounds`` is the run's budget
-    (``--revisions``; 0 turns the loop off: the paper's blind re-prompt)."""
+    (:func:`rounds_for` of ``--revisions``; 0 turns the loop off: the paper's blind
+    re-prompt)."""
 
     llm: CallLog
     catalog: Catalog
@@ -135,7 +150,8 @@ class Feedback:
                                 logical_failure(report.conflict).reason)
         had = {r.key() for r in proposed} | {r.converse().key() for r in proposed
                                               if r.reference is not None}
-        marked = tuple(r if r.key() in had else replace(r, revision=k) for r in revised)
+        marked = tuple(r if r.key() in had else replace(r, source="revision", revision=k)
+                       for r in revised)
         done = Revision(k, failure, prompt, answer, tuple(proposed), marked, "accepted")
         self.done.append(done)
         self.say(f"revision {k} accepted: {len(done.added)} relation(s) added, "

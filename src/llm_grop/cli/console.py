@@ -83,7 +83,7 @@ def print_arrangement(result: ArrangementResult, console: Console,
         gap = result.gaps_m.get(r.key())
         rel_table.add_row(r.subject, r.relation, r.reference or "table",
                           "" if gap is None else f"{gap * 100:.1f}",
-                          r.source if r.revision is None else f"{r.source}, revision {r.revision}")
+                          r.source if r.revision is None else f"revision {r.revision}")
     console.print(rel_table)
 
     # A line of its own: a table's title wraps at the table's width, which is narrow.

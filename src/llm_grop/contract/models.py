@@ -118,17 +118,18 @@ class RelationDoc(Doc):
     relation: RelationName
     reference: Name | None
     line: Text | None = None
-    source: Literal["llm", "preference", "request"] | None = Field(
+    source: Literal["llm", "preference", "request", "revision"] | None = Field(
         None, description="where the relation came from: the LLM's answer, a stated "
-                          "preference, or the request's own words")
+                          "preference, the request's own words, or the LLM's revision after "
+                          "a failure was explained to it (with `revision`)")
     words: Text | None = Field(None, description="the request's words that state it "
                                                  "(source request)")
     gap_m: Num | None = Field(None, description="the gap between the objects' edges the "
                                                 "user stated, metres")
     revision: Annotated[int, Strict(), Field(ge=1)] | None = Field(
         None, description="the round of the feedback loop (`revisions[].round`) whose answer "
-                          "first stated it, after a failure was explained to the LLM; absent: "
-                          "the LLM's first answer, or another source")
+                          "first stated it, after a failure was explained to the LLM (source "
+                          "revision); absent: the LLM's first answer, or another source")
 
 
 class LLMCallDoc(Doc):

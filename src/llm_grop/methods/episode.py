@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 from llm_grop import seeds
 from llm_grop.arrangement.diners import violations_at_table
-from llm_grop.arrangement.revision import Feedback
+from llm_grop.arrangement.revision import Feedback, rounds_for
 from llm_grop.execution import ExecutionPolicy, execute
 from llm_grop.methods.base import EpisodeInput, Method
 from llm_grop.methods.rescue import Rescuer, rescuer
@@ -116,10 +116,13 @@ def _rescuer(planned: PlannedEpisode, inp: EpisodeInput, planner: GropOptions | 
     """The feedback loop's rescue for the executive, when the arrangement came from the LLM
     and rounds are left (``revisions``); ``None`` otherwise."""
     a = planned.arrangement
-    if inp.llm is None or inp.options.revisions <= len(a.revisions):
+    if inp.llm is None:
         return None
-    feedback = Feedback(inp.llm, inp.catalog, inp.seed, inp.options.params,
-                        inp.options.revisions, lambda m: _say(inp, m), list(a.revisions))
+    rounds = rounds_for(inp.options.revisions, inp.llm.model)
+    if rounds <= len(a.revisions):
+        return None
+    feedback = Feedback(inp.llm, inp.catalog, inp.seed, inp.options.params, rounds,
+                        lambda m: _say(inp, m), list(a.revisions))
     return rescuer(feedback, inp.items, a.relations, planned.plan.configuration, a.table,
                    planned.scene, feasibility_profile(planned.feasibility),
                    planner or GropOptions(), inp.seed)

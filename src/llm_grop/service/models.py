@@ -96,7 +96,7 @@ class ArrangeBody(_Body):
                                                "default: its first")
     seed: setting("seed", StrictInt) = described("seed")
     m: setting("m", StrictInt, Field(le=100)) = described("m")
-    revisions: setting("revisions", StrictInt) = described("revisions")
+    revisions: setting("revisions", StrictInt) | None = described("revisions")
     guess: StrictBool = described("guess")
 
 
@@ -136,7 +136,7 @@ class PlanBody(_Body):
     llm: Name | None = None
     seed: setting("seed", StrictInt) = described("seed")
     m: setting("m", StrictInt, Field(le=100)) = described("m")
-    revisions: setting("revisions", StrictInt) = described("revisions")
+    revisions: setting("revisions", StrictInt) | None = described("revisions")
     guess: StrictBool = described("guess")
 
 

@@ -169,12 +169,14 @@ class RunSettings(BaseModel):
     attempts: int = setting(
         3, "Template 1 prompts before keeping the largest consistent subset.", group="llm",
         ge=1)
-    revisions: int = setting(
-        0, "Rounds of the feedback loop per run (2 is a good start): when the LLM's "
-           "relations contradict each other or no placement on the table keeps them, the "
-           "LLM is told what failed and why, and its revision is checked and used; 0, the "
-           "default for now, is the paper's way (a contradiction is answered by asking "
-           "again blindly).", group="llm", ge=0, le=10, door=Door(metavar="N"))
+    revisions: int | None = setting(
+        None, "Rounds of the feedback loop per run: when the LLM's relations contradict "
+              "each other, no placement on the table keeps them, or the robot cannot put an "
+              "object where planned, the LLM is told what failed and why, and its revision "
+              "is checked and used; 0 is the paper's way (a contradiction is answered by "
+              "asking again blindly) [default: 2; 0 with the bundled SmolLM2-135M, whose "
+              "revisions made two of the paper's tasks worse].", group="llm", ge=0, le=10,
+        door=Door(metavar="N"))
     zero_shot: bool = setting(False, "Leave the paper's few-shot examples out.", group="llm")
     notes: str = setting("", "Text for Template 1's [notes] slot.", group="llm",
                          max_length=10_000)

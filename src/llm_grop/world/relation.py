@@ -216,7 +216,7 @@ ASP_NAME: dict[str, str] = {n: m.asp for n, m in MEANINGS.items()}
 
 #: Where a relation came from: the LLM's answer, a preference the user stated
 #: (``--prefer`` or a preferences file), or the request's own words ("a mug on a coaster").
-SOURCES: tuple[str, ...] = ("llm", "preference", "request")
+SOURCES: tuple[str, ...] = ("llm", "preference", "request", "revision")
 
 
 @dataclass(frozen=True)
@@ -228,7 +228,8 @@ class Relation:
     sentence, or the request's words. ``source`` is one of :data:`SOURCES`. ``gap_m`` is a
     distance the user stated for it (the gap between the objects' edges, metres), else
     ``None``. ``revision`` is the round of the feedback loop whose answer first stated it
-    (:mod:`llm_grop.world.failure`), ``None`` for the LLM's first answer and other sources.
+    (:mod:`llm_grop.world.failure`; its ``source`` is then ``"revision"``), ``None`` for
+    the LLM's first answer and other sources.
     """
 
     subject: str
