@@ -5,6 +5,7 @@ OpenAI-compatible server)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from typing import Any
 
@@ -17,7 +18,7 @@ from llm_grop.contract.schemas import json_schema
 from llm_grop.execution import ExecutionPolicy, execute_plan
 from llm_grop.execution.rescue import NewSpot
 from llm_grop.llm.base import SamplingParams
-from llm_grop.methods.rescue import rescuer
+from llm_grop.methods.rescue import REACH_MARGIN_M, rescuer
 from llm_grop.planning.feasibility import feasibility_profile
 from llm_grop.planning.grop import build_plan, choose
 from llm_grop.planning.navigation import Navigator
@@ -188,6 +189,27 @@ def test_a_run_with_the_loop_rescues_the_knife_and_says_so(chat_server) -> None:
     assert knife.y > plate.y + 0.1
     assert any(r.key() == ("dinner knife", "above", "dinner plate")
                for r in result.final.relations)
+
+
+def test_after_an_unreachable_place_the_new_spot_is_nearer_than_the_reach_that_failed(
+        chat_server) -> None:
+    """The belief rated the failed spot reachable; the new spot is chosen only from
+    standing positions nearer to it than the nearest one the arm failed from."""
+    scene, plan = planned()
+    chat_server.reply = lambda body: (
+        "Place the dinner plate in the center of the table.\n"
+        "Place the dinner fork to the left of the dinner plate.\n"
+        "Place the dinner knife above the dinner plate.")
+    rescue = _rescuer(chat_server, scene, plan)
+    old = next(p for p in plan.configuration if p.name == "dinner knife")
+    (ox, oy), = rescue.context("dinner knife").targets_room([old])
+    tried = (Pose2D(ox, oy - 0.6, 1.5708),)
+    states = ScriptedSession(scene, plan.order, {}).objects()
+    spot = rescue("dinner knife", "no_ik", states, tried[0], tried)
+    assert spot is not None and spot.leg.goal is not None
+    (nx, ny), = rescue.context("dinner knife").targets_room([spot.target])
+    for stand in (spot.leg.goal, *spot.leg.alternatives):
+        assert math.hypot(stand.x - nx, stand.y - ny) <= 0.6 - REACH_MARGIN_M
 
 
 def test_the_paper_way_gives_the_knife_up(chat_server) -> None:

@@ -42,6 +42,10 @@ AWAY_M = 0.05
 TRIED_M = 0.05
 #: Navigation reasons: a standing position that failed so is not tried again.
 _DRIVE = frozenset({"blocked"})
+#: A spot is not chosen from a standing position this much less far from it, metres, than
+#: the nearest reach the arm failed at: the belief that planned the failed place was wrong
+#: about that reach, and a spot it rates just as well there would fail the same way.
+REACH_MARGIN_M = 0.05
 
 
 @dataclass
@@ -87,7 +91,8 @@ class Rescuer:
         lying = {p.name: p for p in final_placements(states, tuple(self.targets.values()),
                                                      self.scene)}
         others = [lying.get(n, t) for n, t in self.targets.items() if n != name]
-        spot = self._spot(old, mine, others, pose, tried if reason in _DRIVE else ())
+        spot = self._spot(old, mine, others, pose, tried if reason in _DRIVE else (),
+                          self._failed_reach(old, tried) if reason == "no_ik" else None)
         if spot is None:
             self.feedback.warnings.append(
                 f"no spot on the {self.table.label} keeps the revised relations of the "
@@ -106,11 +111,22 @@ class Rescuer:
             self._ctx = PlanningContext(self.scene, (item,), self.belief, self.planner)
         return self._ctx
 
+    def _failed_reach(self, old: Placement, tried: Sequence[Pose2D]) -> float | None:
+        """The nearest of the standing positions ``tried`` to ``old``'s spot, metres: a
+        reach the arm failed at (``None``: none was tried)."""
+        if not tried:
+            return None
+        (x, y), = self.context(old.name).targets_room([old]).reshape(-1, 2)
+        return min(math.hypot(t.x - x, t.y - y) for t in tried)
+
     def _spot(self, old: Placement, mine: Sequence[Relation], others: Sequence[Placement],
-              pose: Pose2D, tried: Sequence[Pose2D]) -> NewSpot | None:
+              pose: Pose2D, tried: Sequence[Pose2D], failed_reach_m: float | None = None
+              ) -> NewSpot | None:
         """The best spot for ``old``'s object that keeps ``mine`` with ``others``, by the
         planner's utility: the belief's chance of placing it, less the seconds of driving
-        there and of straying from the objects it relates to."""
+        there and of straying from the objects it relates to. When the arm failed to reach
+        ``failed_reach_m`` (metres), only a standing position at least
+        :data:`REACH_MARGIN_M` nearer to the spot counts."""
         name = old.name
         by_name = {p.name: p for p in others}
         support = next((by_name.get(r.reference or "") for r in mine
@@ -134,6 +150,11 @@ class Rescuer:
             return None
         ctx = self.context(name)
         p = ctx.cand_nav_p[None, :] * ctx.place_manipulation(spots)
+        if failed_reach_m is not None:
+            pts = ctx.targets_room(spots).reshape(-1, 2)
+            reach = np.hypot(pts[:, None, 0] - ctx.cand_xy[None, :, 0],
+                             pts[:, None, 1] - ctx.cand_xy[None, :, 1])
+            p[reach > failed_reach_m - REACH_MARGIN_M] = 0.0
         if tried:
             near = np.array([[t.x, t.y] for t in tried])
             gone = (np.hypot(ctx.cand_xy[:, None, 0] - near[None, :, 0],
