@@ -79,6 +79,47 @@ def test_the_executive_places_a_held_object_at_the_spot_the_rescue_gives() -> No
     assert any(s.action == "navigate" and s.goal == new for s in ex.steps)
 
 
+def knife_places(plan: Plan, fails: list[str]) -> list[str]:
+    """A place script: every object placed at once, but the knife's first places end as
+    ``fails`` says."""
+    k = plan.order.index("dinner knife")
+    return ["ok"] * k + fails + ["ok"] * (len(plan.order) - k)
+
+
+def test_an_object_a_place_left_upright_is_picked_again_for_the_new_spot() -> None:
+    """Slid the same way twice, the knife stands on the table: the rescue's spot is taken
+    from there, with a fresh pick."""
+    scene, plan = planned()
+    asked: list[tuple[str, str, bool]] = []
+    new = Pose2D(3.0, 1.35, 1.5708)
+
+    def rescue(name: str, reason: str, states: Any, pose: Pose2D, tried: Any) -> NewSpot:
+        asked.append((name, reason, states[name].held))
+        old = next(p for p in plan.configuration if p.name == name)
+        return NewSpot(replace(old, x=-0.3), Step("navigate", object=name, goal=new))
+
+    session = ScriptedSession(scene, plan.order, {"place": knife_places(plan, ["slid", "slid"])})
+    ex = execute_plan(plan, session, scene, ExecutionPolicy(manip_attempts=3), rescue=rescue)
+    assert asked == [("dinner knife", "slid", False)]
+    assert ex.success and not ex.unplaced
+    knife = next(p for p in ex.final if p.name == "dinner knife")
+    assert abs(knife.x - (-0.3)) < 1e-6
+    assert [c for c in session.calls if c == ("pick", "dinner knife")] == [
+        ("pick", "dinner knife")] * 3
+
+
+def test_an_object_that_tipped_is_not_rescued() -> None:
+    scene, plan = planned()
+    asked: list[str] = []
+
+    def rescue(name: str, reason: str, *args: Any) -> None:
+        asked.append(reason)
+
+    session = ScriptedSession(scene, plan.order, {"place": knife_places(plan, ["tipped"])})
+    ex = execute_plan(plan, session, scene, ExecutionPolicy(manip_attempts=3), rescue=rescue)
+    assert asked == [] and dict(ex.unplaced_reasons)["dinner knife"] == "tipped"
+
+
 def test_without_a_spot_the_object_is_given_up_as_before() -> None:
     scene, plan = planned()
     session = ScriptedSession(scene, plan.order, {"place": knife_fails(plan)})

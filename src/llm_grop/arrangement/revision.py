@@ -77,6 +77,8 @@ _PHYSICAL = {
     "blocked": "the robot could not drive to a place beside the table from which to reach "
                "that spot",
     "contact": "the arm bumped into something each time it reached for that spot",
+    "slid": "each time it was put there it slid away from the spot",
+    "wrong_support": "each time it was put there it came to rest on another object",
 }
 
 

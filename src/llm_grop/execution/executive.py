@@ -19,7 +19,10 @@
   that a later action moved out of tolerance is reported ``disturbed`` and, while its
   attempts remain and nothing rests on it, re-placed from its own standing position.
 * **Giving up.** The object in the hand is put down away from the table (on the floor),
-  and the plan goes on with the next object.
+  and the plan goes on with the next object. Before that, a :class:`Rescue` the executive
+  is given may name another spot for an object in the hand, or for one a place left
+  upright on the target table (it slid, or came to rest on another object, the same way
+  twice); the object is picked up again if it must be, driven to and placed there.
 * **Trips** (:mod:`llm_grop.execution.trips`). Each of the plan's trips picks its objects
   in turn, then places them in turn. A trip of one carries its object in the hand; a trip
   of several carries them on the robot's tray: each is loaded after its pick and unloaded
@@ -59,6 +62,10 @@ from llm_grop.world.plan import ExecutedStep, Execution, ObjectState, Plan, Poin
 from llm_grop.world.scene import Scene
 
 log = logging.getLogger(__name__)
+
+#: Why a place may leave an object it gives up upright on the target table, where it can be
+#: picked up again for a spot the rescue names (one that tipped or fell cannot).
+_LIFTABLE: frozenset[Reason] = frozenset({"slid", "wrong_support"})
 
 def execute(simulator: Simulator, plan: Plan, scene: Scene, items: Sequence[Item],
             rng: np.random.Generator, *, replan: PathPlanner,
@@ -343,11 +350,17 @@ class _Executive:
         log.debug("gave up %s: %s", name, reason)
 
     def _rescued(self, name: str, reason: Reason) -> bool:
-        """Whether the rescue gave the held ``name`` another spot; it is then driven to
-        and placed there, with the place attempts of a fresh target (a failure there is
-        given up, or rescued again, in turn)."""
+        """Whether the rescue gave ``name`` another spot, while the hand holds it or a
+        place left it upright on the target table; it is then picked up again if it must
+        be, driven to and placed there, with the attempts of a fresh target (a failure
+        there is given up, or rescued again, in turn)."""
         state = self.s.objects()[name]
-        if self.rescue is None or not state.held or state.tray:
+        if self.rescue is None or state.tray:
+            return False
+        lying = not state.held
+        if lying and (reason not in _LIFTABLE or state.table != self.scene.target
+                      or state.tilt_rad > self.policy.max_tilt_rad
+                      or any(s.on == name for s in self.s.objects().values())):
             return False
         leg = self.place_legs.get(name)
         tried = () if leg is None or leg.goal is None else (leg.goal, *leg.alternatives)
@@ -359,6 +372,12 @@ class _Executive:
         self.targets[name] = spot.target
         self.used.pop((name, "place"), None)
         self.place_legs[name] = spot.leg
+        if lying:
+            self.used.pop((name, "pick"), None)
+            why = pick(self, name)
+            if why is not None:
+                self.given_up[name] = why
+                return True
         if self.go_leg(spot.leg):
             place(self, name)
         else:

@@ -1,6 +1,7 @@
-"""What the executive asks before it gives up an object it still holds: another spot for
-it. The executive stays below planning: it only calls a :class:`Rescue` it is given, and
-the layer above it (the feedback loop, :mod:`llm_grop.methods.rescue`) decides."""
+"""What the executive asks before it gives up an object it still holds, or one a place left
+upright on the target table: another spot for it. The executive stays below planning: it
+only calls a :class:`Rescue` it is given, and the layer above it (the feedback loop,
+:mod:`llm_grop.methods.rescue`) decides."""
 
 from __future__ import annotations
 
@@ -24,10 +25,12 @@ class NewSpot:
 
 
 class Rescue(Protocol):
-    """Asked by the executive before it gives up ``name`` while the hand still holds it,
-    for ``reason`` (from the closed list), with every object as ``states`` says, the base
-    at ``pose`` and the standing positions already ``tried`` for it (room frame). Another
-    spot for it, or ``None``: the executive then gives it up as before."""
+    """Asked by the executive before it gives up ``name`` while the hand still holds it or
+    while it stands upright on the target table where a place left it (``slid``,
+    ``wrong_support``), for ``reason`` (from the closed list), with every object as
+    ``states`` says, the base at ``pose`` and the standing positions already ``tried`` for
+    it (room frame). Another spot for it, or ``None``: the executive then gives it up as
+    before."""
 
     def __call__(self, name: str, reason: Reason, states: Mapping[str, ObjectState],
                  pose: Pose2D, tried: Sequence[Pose2D]) -> NewSpot | None: ...
