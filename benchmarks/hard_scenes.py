@@ -1,6 +1,7 @@
 """The hard-scene suite of the feedback loop (issue 41): each scene's first arrangement
 fails (``data/hard_scenes.yaml``: a narrow table no placement of the usual relations fits,
-an answer that contradicts itself every time it is asked, a spot the arm cannot reach),
+an answer that contradicts itself every time it is asked, a spot the arm cannot reach that
+the planner believes it can, and one it knows it cannot),
 run without the loop
 (``--revisions 0``, the paper's way) and with it (``--revisions 2``).
 

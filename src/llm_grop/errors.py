@@ -125,6 +125,12 @@ class NoArrangement(Infeasible):
         return (type(self), (self.detail, self.objects, self.why))
 
 
+class OutOfReach(NoArrangement):
+    """Every configuration sampled puts an object where the planner believes the robot
+    cannot place it from anywhere it can stand: ``objects`` names it, ``why`` says how far
+    it is from the nearest such place."""
+
+
 def interrupted(exc: BaseException) -> bool:
     """Whether ``exc`` is, or was caused by, an interrupt: an extension module that Ctrl-C
     stops while it initialises reports ``ImportError: initialization failed`` from the

@@ -2,12 +2,24 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from llm_grop.arrangement import fidelity
 from llm_grop.llm.base import SamplingParams
 from llm_grop.settings import DEFAULTS
+from llm_grop.world.arrangement import Placement
 from llm_grop.world.relation import Choice, Relation
+
+
+class Reach(Protocol):
+    """The planner's view of what the robot can reach, given to the arrangement from above
+    (:mod:`llm_grop.methods.reach`): for a configuration's ``placements`` (table frame),
+    the first object it believes cannot be placed from anywhere the robot can stand, with
+    why in words, or ``None`` when every one can."""
+
+    def __call__(self, placements: Sequence[Placement]) -> tuple[str, str] | None: ...
 
 
 @dataclass(frozen=True)
@@ -29,6 +41,9 @@ class ArrangeOptions:
     ``revisions``: rounds of the feedback loop (:mod:`llm_grop.arrangement.revision`) per
     run; 0 re-prompts blindly on a contradiction, as the paper does; ``None``: as
     :func:`~llm_grop.arrangement.revision.rounds_for` says for the run's model.
+    ``reach``: when given, a sampling whose every configuration puts an object out of the
+    robot's reach is a failure told to the LLM, while rounds are left (one setting only; a
+    table of several diners is not checked); ``None``: planning finds it.
     """
 
     m: int = DEFAULTS.m
@@ -43,3 +58,4 @@ class ArrangeOptions:
     stated: tuple[Relation, ...] = ()
     choices: tuple[Choice, ...] = ()
     revisions: int | None = DEFAULTS.revisions
+    reach: Reach | None = None

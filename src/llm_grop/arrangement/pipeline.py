@@ -12,6 +12,7 @@ request items -> Template 1 -> parsed relations (+ follow-ups for left-out objec
 from __future__ import annotations
 
 import logging
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -32,10 +33,10 @@ from llm_grop.arrangement import (
 from llm_grop.arrangement.answers import read_answer
 from llm_grop.arrangement.grounding import Grounding, ground, preview, stated_for
 from llm_grop.arrangement.layout import GuidedLayout
-from llm_grop.arrangement.options import ArrangeOptions
+from llm_grop.arrangement.options import ArrangeOptions, Reach
 from llm_grop.arrangement.revision import Feedback, rounds_for
 from llm_grop.arrangement.setting import Attempt, Sampled, Setting
-from llm_grop.errors import Infeasible, LLMAnswerUnusable, NoArrangement
+from llm_grop.errors import Infeasible, LLMAnswerUnusable, NoArrangement, OutOfReach
 from llm_grop.llm.base import CallLog
 from llm_grop.world.arrangement import Arrangement, Configuration, Item
 from llm_grop.world.catalog import Catalog
@@ -175,8 +176,10 @@ def _revise_geometry(items: Sequence[Item], setting: Setting, table: Table,
     revision is refused."""
     if feedback.left <= 0:
         return None
-    told = revision.geometric_failure(failure.objects, failure.why, setting.relations,
-                                      f"the {table.label}")
+    where = f"the {table.label}"
+    told = revision.reach_failure(failure.objects[0], failure.why, setting.relations, where) \
+        if isinstance(failure, OutOfReach) else \
+        revision.geometric_failure(failure.objects, failure.why, setting.relations, where)
     revised = feedback.revise(items, setting.relations, told)
     if revised is None:
         return None
@@ -189,18 +192,38 @@ def sample_revising(items: Sequence[Item], setting: Setting, table: Table,
                     rng: Callable[[], np.random.Generator], options: ArrangeOptions,
                     revise: Callable[[Setting, NoArrangement], Setting | None],
                     region: Polygon | None = None) -> tuple[Sampled, Setting]:
-    """:func:`sample_setting`, and when no configuration keeps the relations, sampled
-    again with ``revise``'s revision of them while it gives one; the sampled setting
-    and the setting it kept. Raises the sampler's :class:`~llm_grop.errors.Infeasible`
-    when ``revise`` gives none."""
+    """:func:`sample_setting`, and when no configuration keeps the relations, or every
+    one puts an object out of the robot's reach (``options.reach``), sampled again with
+    ``revise``'s revision of them while it gives one; the sampled setting and the setting
+    it kept. Raises the sampler's :class:`~llm_grop.errors.Infeasible` when ``revise``
+    gives none (out of reach, the sampling stands: planning says why)."""
     while True:
         try:
-            return sample_setting(items, setting, table, rng, options, region), setting
+            sampled = sample_setting(items, setting, table, rng, options, region)
         except NoArrangement as exc:
             revised = revise(setting, exc)
             if revised is None:
                 raise
             setting = revised
+            continue
+        out = _out_of_reach(sampled.configurations, options.reach)
+        revised = None if out is None else revise(setting, out)
+        if revised is None:
+            return sampled, setting
+        setting = revised
+
+
+def _out_of_reach(configs: Sequence[Configuration], reach: Reach | None) -> OutOfReach | None:
+    """The failure of ``configs`` when every one puts an object out of ``reach``: the
+    object most of them do, and why; ``None`` when one keeps every object in reach."""
+    if reach is None:
+        return None
+    out = [reach(c.placements) for c in configs]
+    if not out or any(o is None for o in out):
+        return None
+    (name, why), _ = Counter(o for o in out if o is not None).most_common(1)[0]
+    return OutOfReach(f"{name} is out of the robot's reach in every configuration ({why})",
+                      (name,), why)
 
 
 def sample_setting(items: Sequence[Item], setting: Setting, table: Table,

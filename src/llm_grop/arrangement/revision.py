@@ -71,6 +71,16 @@ def geometric_failure(objects: Sequence[str], why: str, proposed: Sequence[Relat
                    + (f" (relations: {said})" if said else ""), tuple(objects), involved)
 
 
+def reach_failure(name: str, why: str, proposed: Sequence[Relation], where: str) -> Failure:
+    """The failure of relations that put ``name`` on ``where`` out of the robot's reach
+    in every configuration: ``why`` says how far (the planner's belief)."""
+    involved = tuple(r for r in proposed if name in (r.subject, r.reference))
+    said = "; ".join(repr(r.sentence()) for r in involved)
+    return Failure("physical", f"the robot cannot put the {name} where these relations put "
+                               f"it on {where}: {why}"
+                   + (f" (relations: {said})" if said else ""), (name,), involved)
+
+
 #: What each reason the executive gives an object up for means, told to the LLM.
 _PHYSICAL = {
     "no_ik": "the arm could not reach that spot from anywhere the robot could stand",

@@ -15,6 +15,7 @@ from llm_grop.arrangement.diners import violations_at_table
 from llm_grop.arrangement.revision import Feedback, rounds_for
 from llm_grop.execution import ExecutionPolicy, execute
 from llm_grop.methods.base import EpisodeInput, Method
+from llm_grop.methods.reach import PlannerReach
 from llm_grop.methods.rescue import Rescuer, rescuer
 from llm_grop.planning.feasibility import FeasibilityModel, feasibility_profile
 from llm_grop.planning.grop import build_plan
@@ -54,12 +55,17 @@ def plan_episode(method: Method, inp: EpisodeInput, scene: Scene, *,
     counts the arrangement's computation without LLM calls, GROP and the OMPL paths.
     Raises :class:`~llm_grop.errors.Infeasible` when no plan exists.
     """
-    proposal = method.arrangement.propose(inp)
-    _say(inp, f"planning for {len(proposal.configurations)} configuration(s)")
     t0 = time.perf_counter()
     profile = model if isinstance(model, str) else "custom"
     belief = feasibility_profile(model) if isinstance(model, str) else model
     ctx = PlanningContext(scene, inp.items, belief, planner)
+    context_s = time.perf_counter() - t0
+    if inp.llm is not None and rounds_for(inp.options.revisions, inp.llm.model) > 0:
+        # With the feedback loop, an arrangement the robot cannot reach is told to the LLM.
+        inp = replace(inp, options=replace(inp.options, reach=PlannerReach(ctx)))
+    proposal = method.arrangement.propose(inp)
+    _say(inp, f"planning for {len(proposal.configurations)} configuration(s)")
+    t0 = time.perf_counter() - context_s
     cand = method.standing_choice.choose(ctx, proposal, seeds.stream(inp.seed, "standing"))
     plan = build_plan(ctx, cand, navigator(scene, planner), inp.seed,
                       len(proposal.configurations))

@@ -17,6 +17,7 @@ standing policy (TPRA, LATP) shares all of this except the standing choice.
 from __future__ import annotations
 
 import logging
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
@@ -219,8 +220,10 @@ def choose(ctx: PlanningContext, configs: Sequence[Configuration],
                 if not best_of_all:
                     break
     if not found:
+        # The commonest reason, the first given among equals: a set's order would change
+        # from process to process with Python's string hashing.
         raise Infeasible(f"no plan for any of {len(configs)} configuration(s): "
-                         f"{max(set(reasons), key=reasons.count)}")
+                         f"{Counter(reasons).most_common(1)[0][0]}")
     if len(ctx.items) > EXACT_LIMIT and policy == "utility":
         top = sorted(found, key=lambda c: (-c.score, c.index))[:REFINE]
         refined = [evaluate(ctx, configs[c.index], c.index, policy, refined=True) for c in top]
