@@ -10,6 +10,7 @@ from dataclasses import replace
 from typing import Any
 
 import jsonschema
+import pytest
 
 from llm_grop import BackendOptions, make_llm, run
 from llm_grop.arrangement.revision import Feedback
@@ -41,6 +42,10 @@ FLAT = (placement("dinner plate", 0.0, -0.05),
 RELATIONS = (Relation("dinner fork", "to the left of", "dinner plate"),
              Relation("dinner knife", "to the right of", "dinner plate"))
 CATALOG = Catalog.load()
+#: A revision that moves the knife above the plate.
+KNIFE_ABOVE = ("Place the dinner plate in the center of the table.\n"
+               "Place the dinner fork to the left of the dinner plate.\n"
+               "Place the dinner knife above the dinner plate.")
 ITEMS = tuple(items_from_names([p.name for p in FLAT], CATALOG))
 
 
@@ -138,10 +143,7 @@ def _rescuer(server, scene: Scene, plan: Plan, rounds: int = 2):  # type: ignore
 
 def test_the_llm_is_told_and_its_revision_gives_the_object_another_spot(chat_server) -> None:
     scene, plan = planned()
-    chat_server.reply = lambda body: (
-        "Place the dinner plate in the center of the table.\n"
-        "Place the dinner fork to the left of the dinner plate.\n"
-        "Place the dinner knife above the dinner plate.")
+    chat_server.reply = lambda body: KNIFE_ABOVE
     rescue = _rescuer(chat_server, scene, plan)
     session = ScriptedSession(scene, plan.order, {"place": knife_fails(plan)})
     ex = execute_plan(plan, session, scene, ExecutionPolicy(manip_attempts=2), rescue=rescue)
@@ -237,10 +239,7 @@ def test_after_an_unreachable_place_the_new_spot_is_nearer_than_the_reach_that_f
     """The belief rated the failed spot reachable; the new spot is chosen only from
     standing positions nearer to it than the nearest one the arm failed from."""
     scene, plan = planned()
-    chat_server.reply = lambda body: (
-        "Place the dinner plate in the center of the table.\n"
-        "Place the dinner fork to the left of the dinner plate.\n"
-        "Place the dinner knife above the dinner plate.")
+    chat_server.reply = lambda body: KNIFE_ABOVE
     rescue = _rescuer(chat_server, scene, plan)
     old = next(p for p in plan.configuration if p.name == "dinner knife")
     (ox, oy), = rescue.context("dinner knife").targets_room([old])
@@ -253,7 +252,12 @@ def test_after_an_unreachable_place_the_new_spot_is_nearer_than_the_reach_that_f
         assert math.hypot(stand.x - nx, stand.y - ny) <= 0.6 - REACH_MARGIN_M
 
 
-def test_the_paper_way_gives_the_knife_up(chat_server) -> None:
+@pytest.mark.parametrize(("revisions", "rounds"), [
+    (0, []),  # the paper's way
+    (None, [("physical", "refused")]),  # by default a model other than the bundled one is
+])                                      # told; repeating itself, its round is refused
+def test_a_knife_the_llm_cannot_move_is_given_up(chat_server, revisions: int | None,
+                                                 rounds: list[tuple[str, str]]) -> None:
     chat_server.reply = lambda body: (
         "About 3 centimeters." if "centimeters" in body["messages"][-1]["content"] else
         "Place the dinner plate in the center of the table.\n"
@@ -262,23 +266,6 @@ def test_the_paper_way_gives_the_knife_up(chat_server) -> None:
     opts = BackendOptions(base_url=chat_server.url, api_key="t", max_retries=0)
     result = run("a dinner plate, a dinner fork and a dinner knife", llm="openai",
                  llm_options=opts, scene=two_table_room(), chairs=0, seed=1,
-                 simulator=_Scripted(), revisions=0)
+                 simulator=_Scripted(), revisions=revisions)
     assert not result.success and result.execution.unplaced == ("dinner knife",)
-    assert result.planned.revisions == ()
-
-
-def test_by_default_a_capable_model_is_told(chat_server) -> None:
-    """Without ``revisions``, a model other than the bundled one gets the loop's 2 rounds:
-    here it repeats itself, so the round is refused and the knife still given up."""
-    chat_server.reply = lambda body: (
-        "About 3 centimeters." if "centimeters" in body["messages"][-1]["content"] else
-        "Place the dinner plate in the center of the table.\n"
-        "Place the dinner fork to the left of the dinner plate.\n"
-        "Place the dinner knife to the right of the dinner plate.")
-    opts = BackendOptions(base_url=chat_server.url, api_key="t", max_retries=0)
-    result = run("a dinner plate, a dinner fork and a dinner knife", llm="openai",
-                 llm_options=opts, scene=two_table_room(), chairs=0, seed=1,
-                 simulator=_Scripted())
-    assert [(r.failure.kind, r.outcome) for r in result.planned.revisions] == [
-        ("physical", "refused")]
-    assert result.execution.unplaced == ("dinner knife",)
+    assert [(r.failure.kind, r.outcome) for r in result.planned.revisions] == rounds
