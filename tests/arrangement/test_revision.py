@@ -290,3 +290,14 @@ def test_by_default_the_bundled_model_is_asked_again_blindly(chat_server, tmp_pa
     (0, "qwen2.5:7b", 0)])
 def test_the_rounds_a_run_may_spend(revisions: int | None, model: str, rounds: int) -> None:
     assert rounds_for(revisions, model) == rounds
+
+
+def test_relations_the_user_stated_are_not_sent_for_revision(chat_server) -> None:
+    """Preferences that leave the mug no room on the small table are the user's: the
+    sampler's failure stands and the LLM is not asked to revise them (only for the gaps
+    the preferences leave open)."""
+    prefs = ("the dinner plate in the center of the table",
+             "the mug above the dinner plate")
+    with pytest.raises(Infeasible, match="no feasible arrangement"):
+        _arrange(chat_server, MUG_REQUEST, table=SMALL, preferences=prefs)
+    assert not any(is_revision(p) for p in _prompts(chat_server))

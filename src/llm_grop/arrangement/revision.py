@@ -24,6 +24,9 @@ from llm_grop.world.catalog import Catalog
 from llm_grop.world.failure import Failure, Revision
 from llm_grop.world.relation import Relation
 
+#: The sources of relations the LLM stated, which a revision may change.
+FROM_LLM = frozenset({"llm", "revision"})
+
 #: Rounds per run when ``--revisions`` is not given, with a model other than the bundled one.
 DEFAULT_ROUNDS = 2
 
@@ -132,8 +135,12 @@ class Feedback:
                stated: Sequence[Relation] = ()) -> tuple[Relation, ...] | None:
         """One round: tell the LLM ``failure`` of its ``proposed`` relations and read its
         revision. The revised relations (those not in ``proposed`` marked ``revision``),
-        or ``None`` when the round is refused (recorded, with one warning)."""
+        or ``None`` when the round is refused (recorded, with one warning), when no round
+        is left, or when none of the relations involved (else of those ``proposed``) came
+        from the LLM: the user's stand, and the LLM is not asked."""
         if self.left <= 0:
+            return None
+        if not any(r.source in FROM_LLM for r in failure.relations or proposed):
             return None
         k = len(self.done) + 1
         self.say(f"{failure.kind} failure: {failure.reason}; asking {self.llm.model} to "
