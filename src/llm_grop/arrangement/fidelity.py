@@ -33,18 +33,27 @@ def has_gap(relation: Relation) -> bool:
         and relation.reference is not None
 
 
+def axis_gaps_m(relation: str, xs: ArrayLike, ys: ArrayLike, fs: Footprint, xr: ArrayLike,
+                yr: ArrayLike, fr: Footprint) -> list[Floats]:
+    """The gap, metres, on each axis ``relation`` moves on (x, then y; both for a diagonal):
+    the distance between the bounding boxes' facing edges, negative where they overlap on
+    that axis (arrays broadcast)."""
+    dx, dy = DIRECTION[relation]
+    gaps = []
+    if dx:
+        gaps.append(np.asarray(dx * np.subtract(xs, xr) - fs.hx - fr.hx, dtype=float))
+    if dy:
+        gaps.append(np.asarray(dy * np.subtract(ys, yr) - fs.hy - fr.hy, dtype=float))
+    return gaps
+
+
 def realised_gap_m(relation: str, stated_m: float, xs: ArrayLike, ys: ArrayLike,
                    fs: Footprint, xr: ArrayLike, yr: ArrayLike, fr: Footprint) -> Floats:
     """The gap ``subject relation reference`` realises with the subject at ``(xs, ys)`` and
     the reference at ``(xr, yr)`` (arrays broadcast): on each axis the relation moves on,
     the distance between the bounding boxes' facing edges; of two axes, the one farther
     from ``stated_m``."""
-    dx, dy = DIRECTION[relation]
-    gaps = []
-    if dx:
-        gaps.append(dx * np.subtract(xs, xr) - fs.hx - fr.hx)
-    if dy:
-        gaps.append(dy * np.subtract(ys, yr) - fs.hy - fr.hy)
+    gaps = axis_gaps_m(relation, xs, ys, fs, xr, yr, fr)
     if len(gaps) == 1:
         return np.asarray(gaps[0], dtype=float)
     gx, gy = np.broadcast_arrays(*gaps)

@@ -2,46 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
-from typing import Any
 
 import click
 
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
-from llm_grop.errors import BadInput
-
-
-def read_rating_input(path: Path) -> tuple[dict[str, Any], str | None, str]:
-    """``(arrangement, run request, where)`` from an arrangement or run JSON file.
-
-    A run JSON (one with a ``final`` key) gives its ``final`` arrangement, with the
-    run's ``request`` as the request when it has one.
-    """
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise BadInput(f"{path}: cannot read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise BadInput(f"{path}: not UTF-8 text") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise BadInput(f"{path}: not valid JSON (line {exc.lineno}: {exc.msg})") from None
-    if not isinstance(data, dict):
-        raise BadInput(f"{path}: expected a JSON object (an arrangement or a run JSON)")
-    if "final" not in data:
-        return data, None, str(path)
-    # Only `final` and `request` of a run JSON are read (and `final` is validated by the
-    # rater as an arrangement): a run written by another system may lack the rest.
-    final = data["final"]
-    if not isinstance(final, dict):
-        raise BadInput(f"{path}: final: expected an arrangement object")
-    request = data.get("request")
-    if request is not None and not isinstance(request, str):
-        raise BadInput(f"{path}: request: expected a string, got {request!r}")
-    return final, request, f"{path}: final"
 
 
 @click.command(epilog=EPILOG)
@@ -65,12 +31,13 @@ def rate(file: Path, request_text: str | None, json_path: Path | None,
     from rich.markup import escape
     from rich.table import Table as RichTable
 
+    from llm_grop.contract.serialize import read_arrangement_file
     from llm_grop.evaluation.rater import rate as rate_arrangement
     from llm_grop.files.jsonio import write_json
     from llm_grop.language.request import parse_request
     from llm_grop.world.catalog import Catalog
 
-    arrangement, run_request, where = read_rating_input(file)
+    arrangement, run_request, where = read_arrangement_file(file)
     catalog = Catalog.load(catalog_files)
     text = request_text if request_text is not None else run_request
     requested = None

@@ -1,9 +1,12 @@
 """The one place where arrangement records turn into the contract's JSON and back, through
-the models of :mod:`llm_grop.contract.models`."""
+the models of :mod:`llm_grop.contract.models`, and where an arrangement or run JSON file is
+read."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any, TypeVar
 
 from llm_grop.contract.models import (
@@ -158,3 +161,35 @@ def table_of(doc: ArrangementDoc, where: str = "arrangement") -> Table:
             raise BadInput(f"{where}: objects[{i}] ({o.name!r}).diner: {o.diner} but the "
                            f"table seats {len(table.seats)} diner(s)")
     return table
+
+
+def read_arrangement_file(path: Path) -> tuple[dict[str, Any], str | None, str]:
+    """``(arrangement, run request, where)`` from an arrangement or run JSON file: the
+    arrangement as parsed JSON, not yet validated, and ``where`` naming it in messages.
+
+    A run JSON (one with a ``final`` key) gives its ``final`` arrangement, with the
+    run's ``request`` as the request when it has one.
+    """
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise BadInput(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise BadInput(f"{path}: not UTF-8 text") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise BadInput(f"{path}: not valid JSON (line {exc.lineno}: {exc.msg})") from None
+    if not isinstance(data, dict):
+        raise BadInput(f"{path}: expected a JSON object (an arrangement or a run JSON)")
+    if "final" not in data:
+        return data, None, str(path)
+    # Only `final` and `request` of a run JSON are read (and `final` is validated by its
+    # reader as an arrangement): a run written by another system may lack the rest.
+    final = data["final"]
+    if not isinstance(final, dict):
+        raise BadInput(f"{path}: final: expected an arrangement object")
+    request = data.get("request")
+    if request is not None and not isinstance(request, str):
+        raise BadInput(f"{path}: request: expected a string, got {request!r}")
+    return final, request, f"{path}: final"

@@ -14,7 +14,6 @@ the diner's right, +y away from the diner, who sits at the -y edge).
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Literal
@@ -27,12 +26,10 @@ from llm_grop.errors import BadInput
 from llm_grop.evaluation.conventions import Conventions
 from llm_grop.geometry.footprint import footprint
 from llm_grop.world.arrangement import UPRIGHT_TILT_RAD
-from llm_grop.world.catalog import Catalog, normalize_name
+from llm_grop.world.catalog import Catalog, instance_kind, normalize_name
 
 Severity = Literal["missing", "major", "minor"]
 SEVERITIES: tuple[Severity, ...] = ("missing", "major", "minor")
-
-_NUMBERED = re.compile(r"\s+\d+$")
 
 
 @dataclass(frozen=True)
@@ -144,7 +141,7 @@ def kind_of(name: str, catalog: Catalog) -> str:
     ``"dinner fork 2"`` and ``"fork"`` give ``"dinner fork"``; an unknown name is
     returned normalised.
     """
-    base = _NUMBERED.sub("", normalize_name(name))
+    base = instance_kind(normalize_name(name))
     spec = catalog.lookup(base)
     return spec.name if spec is not None else base
 

@@ -29,6 +29,8 @@ CATALOG_ENV = "LLM_GROP_CATALOG"
 #: The most objects of one kind a catalog may let wait in one pile.
 MAX_STACK = 12
 _ARTICLES = re.compile(r"^(?:the|a|an|one|some|another)\s+")
+#: A trailing instance number: "dinner fork 2" is the second instance of "dinner fork".
+_INSTANCE_NUMBER = re.compile(r"\s+\d+$")
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,12 @@ def normalize_name(text: str) -> str:
     text = re.sub(r"[^a-z0-9' -]+", " ", text.lower().replace("-", " "))
     text = re.sub(r"\s+", " ", text).strip(" '")
     return _ARTICLES.sub("", text)
+
+
+def instance_kind(name: str) -> str:
+    """The kind an instance's name is numbered from: ``"dinner fork 2"`` -> ``"dinner fork"``
+    (a name without a trailing number is returned as it is)."""
+    return _INSTANCE_NUMBER.sub("", name)
 
 
 def singular_forms(name: str) -> list[str]:
