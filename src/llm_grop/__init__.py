@@ -31,6 +31,7 @@ if TYPE_CHECKING:
         available_methods,
         available_simulators,
         execute,
+        learn,
         make_llm,
         plan,
         plan_from_dict,
@@ -38,6 +39,7 @@ if TYPE_CHECKING:
         run,
         understand,
     )
+    from llm_grop.arrangement.learning import Learned, Learning
     from llm_grop.arrangement.pipeline import ArrangementResult, ArrangeOptions
     from llm_grop.contract.run_json import run_to_dict
     from llm_grop.contract.serialize import arrangement_from_dict, arrangement_to_dict
@@ -74,6 +76,9 @@ _EXPORTS: dict[str, str] = {
     "plan_to_dict": "llm_grop.api",
     "plan_from_dict": "llm_grop.api",
     "understand": "llm_grop.api",
+    "learn": "llm_grop.api",
+    "Learned": "llm_grop.arrangement.learning",
+    "Learning": "llm_grop.arrangement.learning",
     "RunSettings": "llm_grop.settings",
     "Request": "llm_grop.world.request",
     "ArrangeOptions": "llm_grop.arrangement.pipeline",
@@ -127,6 +132,8 @@ __all__ = [
     "Infeasible",
     "Item",
     "LLM",
+    "Learned",
+    "Learning",
     "LLMError",
     "LLMGropError",
     "LLMTransient",
@@ -144,6 +151,7 @@ __all__ = [
     "arrange",
     "arrangement_from_dict",
     "execute",
+    "learn",
     "plan",
     "plan_from_dict",
     "plan_to_dict",

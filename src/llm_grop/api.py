@@ -47,6 +47,7 @@ from llm_grop.world.table import Table
 from llm_grop.world.tasks import Task, get_task, load_tasks
 
 if TYPE_CHECKING:
+    from llm_grop.arrangement.learning import Learning
     from llm_grop.methods.base import EpisodeInput
     from llm_grop.methods.episode import PlannedEpisode
     from llm_grop.planning.utility import GropOptions
@@ -54,7 +55,7 @@ if TYPE_CHECKING:
     from llm_grop.world.plan import RunResult
 
 __all__ = ["PlanResult", "RunSettings", "arrange", "available_methods",
-           "available_simulators", "execute", "make_llm", "plan", "plan_from_dict",
+           "available_simulators", "execute", "learn", "make_llm", "plan", "plan_from_dict",
            "plan_to_dict", "resolve_items", "run", "understand"]
 
 
@@ -341,6 +342,20 @@ def _given_items(arrangement: Arrangement, catalog: Catalog) -> tuple[Item, ...]
         source, words = origins.get(p.name, ("request", ""))
         items.append(Item(p.name, spec, p.diner, source, words))
     return tuple(items)
+
+
+def learn(examples: Sequence[str | PathLike[str] | Mapping[str, Any]], *,
+          catalog: Catalog | None = None) -> Learning:
+    """A person's way of setting the table, learned from ``examples`` without an LLM: each
+    an arrangement or run JSON file, or such a document parsed (a run's ``final`` is
+    read). The result's sentences are preferences (write
+    :meth:`~llm_grop.arrangement.learning.Learning.preference_file` to a file for
+    ``preferences_file``); see :mod:`llm_grop.arrangement.learning`. With several
+    examples, one that is not a table setting is a warning; :class:`BadInput` when none is.
+    """
+    from llm_grop.arrangement.learning import learn as learn_examples
+
+    return learn_examples(examples, catalog or Catalog.load())
 
 
 def plan_to_dict(planned: PlanResult) -> dict[str, Any]:

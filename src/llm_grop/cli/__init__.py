@@ -11,6 +11,7 @@ from llm_grop.cli.arrange import arrange
 from llm_grop.cli.bench import bench
 from llm_grop.cli.doctor import doctor
 from llm_grop.cli.flags import reworded
+from llm_grop.cli.learn import learn
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG
 from llm_grop.cli.plugins import plugins
@@ -36,6 +37,7 @@ cli.add_command(run)
 cli.add_command(bench)
 cli.add_command(sweep)
 cli.add_command(rate)
+cli.add_command(learn)
 cli.add_command(ratings)
 cli.add_command(schema)
 cli.add_command(plugins)

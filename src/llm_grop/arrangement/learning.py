@@ -1,0 +1,400 @@
+"""Learning a person's way of setting the table from a few example settings, exactly and
+without an LLM (issue 42, its first step).
+
+Each diner's setting in each example (an :class:`~.examples.Observation`) is read with
+the one meaning of each relation (``world/relations.yaml``, tested by
+:func:`~llm_grop.arrangement.predicates.pair_relation_holds`): between two objects the one
+relation whose axis states hold, or ``on top of`` when one rests on the other (its
+``on``). Its gap is measured as the layout sets it (:func:`~.fidelity.axis_gaps_m`,
+between bounding boxes). Of the setting's main object (the one the layout would take as
+its origin, :func:`~.geometry.choose_origin`) the distance from the diner's edge of the
+table is measured as :func:`~.fidelity.edge_gap_m` does.
+
+**Which pairs.** Not every pair: a setting of n objects has n(n-1)/2 pairs, most of them
+far apart and of no interest to anyone ("the fork below and to the left of the mug").
+The learner keeps a *spanning tree of nearest neighbours*: the candidate pairs are the
+pairs some observation shows together, ranked by how close they are (the median, over
+the observations showing both, of the distance between their footprints' bounding
+boxes; a stacked pair is at 0), and Kruskal's algorithm takes the closest pair that joins
+two groups not yet joined, until every object is joined. So each object is tied to its
+nearest neighbour (which a minimum spanning tree always holds), the layout can walk from
+its origin to every object along the learned relations (:mod:`.geometry` places an
+object from its relation to one placed before), and there are at most n - 1 sentences
+with no cycle, so they can never contradict each other in clingo and a configuration
+that keeps the examples' gaps exists. Two objects in one stack that do not rest on each
+other directly (the lid and the mat under its mug) are not a candidate: their relation
+follows from the stack.
+
+**What is learned.** A tree pair's relation is learned when it is the same in every
+observation that shows both objects; its gap is their median (clamped at 0), and the
+spread (min to max) is kept. A pair whose relation differs between observations is a
+:class:`Contradiction`: reported, not learned, and its objects stay joined in the tree
+(no farther pair is tried in its place, so one varying object gives one report). The
+main object's distance from the diner's edge is learned from the observations where it
+is the main object, since only the layout's origin uses that sentence.
+
+Every sentence is written in the paper's phrasing and read back with the preference
+reader (:mod:`.preferences`) before it is kept, so what is learned is exactly what
+``--preferences`` will read. Lengths in metres inside, centimetres in sentences.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import statistics
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from llm_grop.arrangement.examples import Example, Observation, read_example, read_example_file
+from llm_grop.arrangement.fidelity import axis_gaps_m, edge_gap_m
+from llm_grop.arrangement.geometry import choose_origin
+from llm_grop.arrangement.predicates import Footprint, pair_relation_holds, stacked_pairs
+from llm_grop.arrangement.preferences import read_edge_preferences, read_preferences
+from llm_grop.errors import BadInput
+from llm_grop.world.arrangement import Placement
+from llm_grop.world.catalog import Catalog
+from llm_grop.world.relation import CONVERSE, MEANINGS, ON_TOP_OF, UNDER
+
+#: The relations read from where two objects lie (all but stacking, read from ``on``, and
+#: ``center``, which is about the table, not a pair).
+_LYING = tuple(m.name for m in MEANINGS.values() if m.reference and m.rests is None)
+#: The reading of two objects that overlap on both axes without one resting on the other.
+OVERLAPPING = "overlapping"
+
+
+@dataclass(frozen=True)
+class Learned:
+    """One learned preference.
+
+    ``sentence`` is in the paper's phrasing (what ``--preferences`` reads):
+    ``subject relation reference`` with the gap, or, for ``relation`` ``None``, the
+    subject's distance from the diner's edge of the table. ``gap_cm`` is the median gap
+    (centimetres; ``None`` for stacking) and ``spread_cm`` the smallest and largest seen.
+    ``sources`` are the observations it was read from (every one showing its objects).
+    """
+
+    sentence: str
+    subject: str
+    relation: str | None
+    reference: str | None
+    gap_cm: float | None
+    spread_cm: tuple[float, float] | None
+    sources: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Contradiction:
+    """A pair of neighbours whose relation differs between observations: ``readings``
+    holds each reading seen, in words (``the mug to the left of the dinner plate``), with
+    the observations it was seen in."""
+
+    subject: str
+    reference: str
+    readings: tuple[tuple[str, tuple[str, ...]], ...]
+
+    def message(self) -> str:
+        """The contradiction in one line."""
+        seen = "; ".join(f"{said} in {', '.join(sources)}" for said, sources in self.readings)
+        return (f"the examples disagree about the {self.subject} and the {self.reference}: "
+                f"{seen}; not learned")
+
+
+@dataclass(frozen=True)
+class Learning:
+    """What a few examples teach: the ``sentences`` learned, the ``contradictions``
+    between examples (not learned), ``warnings`` (examples or objects left out, one line
+    each), and the ``examples`` learned from (those that could be read)."""
+
+    sentences: tuple[Learned, ...]
+    contradictions: tuple[Contradiction, ...] = ()
+    warnings: tuple[str, ...] = ()
+    examples: tuple[str, ...] = ()
+
+    def preference_file(self) -> str:
+        """The sentences as a preferences file (YAML ``preferences: [sentence, ...]``), each
+        with its spread and sources as a comment, under a header naming the examples."""
+        lines = [f"# Preferences learned by `llm-grop learn` from {_count(self.examples)}:",
+                 *(f"#   {_flat(e)}" for e in self.examples),
+                 "# Each sentence holds in every example that shows its objects; a distance",
+                 "# is the median of theirs, and the comment gives the range seen and where.",
+                 "preferences:" if self.sentences else "preferences: []"]
+        for s in self.sentences:
+            seen = "" if s.spread_cm is None else f"{_range(s.spread_cm)}; "
+            lines.append(f"  - {_yaml_scalar(s.sentence)}  # {seen}"
+                         f"{_flat(', '.join(s.sources))}")
+        return "\n".join(lines) + "\n"
+
+
+@dataclass(frozen=True)
+class _Reading:
+    """One observation's reading of a pair, in the pair's canonical orientation."""
+
+    source: str
+    relation: str
+    gap_m: float | None
+    distance_m: float
+
+
+def learn(examples: Sequence[str | PathLike[str] | Mapping[str, Any]],
+          catalog: Catalog) -> Learning:
+    """The preferences the ``examples`` teach: files (arrangement or run JSON) or parsed
+    documents (named ``example N``).
+
+    With several examples, one that cannot be read is a warning and the rest are still
+    learned from; raises :class:`BadInput` when none can (or the only one cannot), and
+    when nothing at all is learned.
+    """
+    if not examples:
+        raise BadInput("learn: give at least one example setting")
+    read: list[Example] = []
+    names: list[str] = []
+    refused: list[str] = []
+    warnings: list[str] = []
+    seen: set[str] = set()
+    for k, example in enumerate(examples):
+        name = f"example {k + 1}" if isinstance(example, Mapping) else str(example)
+        if name in seen:
+            warnings.append(f"{name}: given twice; learned from once")
+            continue
+        seen.add(name)
+        try:
+            one = read_example(_final(example), catalog, where=name) \
+                if isinstance(example, Mapping) else read_example_file(Path(example), catalog)
+        except BadInput as exc:
+            if len(examples) == 1:
+                raise
+            refused.append(str(exc))
+            warnings.append(f"{exc}; skipped")
+            continue
+        read.append(one)
+        names.append(name)
+    if not read:
+        raise BadInput(f"none of the {len(refused)} examples is a table setting: "
+                       + "; ".join(refused))
+    learning = learn_from([o for e in read for o in e.observations], catalog)
+    if not learning.sentences:
+        why = "; ".join(c.message() for c in learning.contradictions)
+        raise BadInput(f"learned nothing from {_count(names)}" + (f": {why}" if why else ""))
+    return Learning(learning.sentences, learning.contradictions,
+                    (*warnings, *(w for e in read for w in e.warnings), *learning.warnings),
+                    tuple(names))
+
+
+def _final(document: Mapping[str, Any]) -> Mapping[str, Any]:
+    """The setting of a parsed document: a run JSON's ``final``, else the document."""
+    final = document.get("final")
+    return final if isinstance(final, Mapping) else document
+
+
+def learn_from(observations: Sequence[Observation], catalog: Catalog) -> Learning:
+    """The sentences, contradictions and warnings of ``observations`` (the module doc)."""
+    readings: dict[tuple[str, str], list[_Reading]] = {}
+    order: dict[str, int] = {}
+    for obs in observations:
+        for item in obs.items:
+            order.setdefault(item.name, len(order))
+        for key, reading in _pairs(obs):
+            readings.setdefault(key, []).append(reading)
+    warnings: list[str] = []
+    contradictions: list[Contradiction] = []
+    chosen: list[tuple[tuple[str, str], list[_Reading]]] = []
+    group = {name: name for name in order}
+
+    def root(name: str) -> str:
+        while group[name] != name:
+            name = group[name]
+        return name
+
+    ranked = sorted(readings.items(), key=lambda kv: (
+        statistics.median(r.distance_m for r in kv[1]), order[kv[0][0]], order[kv[0][1]]))
+    for (subject, reference), seen in ranked:
+        a, b = root(subject), root(reference)
+        if a == b:
+            continue
+        group[a] = b
+        relations = list(dict.fromkeys(r.relation for r in seen))
+        if len(relations) > 1:
+            contradictions.append(Contradiction(subject, reference, tuple(
+                (_said(subject, rel, reference),
+                 tuple(r.source for r in seen if r.relation == rel)) for rel in relations)))
+        elif relations == [OVERLAPPING]:
+            warnings.append(f"the {subject} and the {reference} overlap in "
+                            f"{', '.join(r.source for r in seen)} and neither rests on the "
+                            "other; their relation is not learned")
+        else:
+            chosen.append(((subject, reference), seen))
+    sentences = [*_edges(observations, catalog, warnings)]
+    chosen.sort(key=lambda kv: (order[kv[0][0]], order[kv[0][1]]))
+    for (subject, reference), seen in chosen:
+        learned = _relation_sentence(subject, reference, seen, observations, catalog)
+        if learned is None:
+            warnings.append(f"cannot phrase the {subject} {seen[0].relation} the {reference} "
+                            "so that the preference reader reads it back; not learned")
+        else:
+            sentences.append(learned)
+    return Learning(tuple(sentences), tuple(contradictions), tuple(warnings))
+
+
+def relation_between(s: Placement, r: Placement) -> str | None:
+    """The relation ``s`` (subject) keeps to ``r`` (reference) where they lie: ``on top of``
+    or ``under`` when one rests on the other (``on``), else the one relation of
+    ``relations.yaml`` whose axis states hold; ``None`` when they overlap on both axes
+    without resting on each other."""
+    if s.on == r.name:
+        return ON_TOP_OF
+    if r.on == s.name:
+        return UNDER
+    fs, fr = Footprint.of_placement(s), Footprint.of_placement(r)
+    for name in _LYING:
+        if bool(pair_relation_holds(name, s.x, s.y, fs, r.x, r.y, fr)):
+            return name
+    return None
+
+
+def observed_gap_m(relation: str, s: Placement, r: Placement) -> float:
+    """The gap, metres, between ``s`` and ``r`` for ``relation`` (not stacking), edge to
+    edge as the layout sets it. A diagonal's two axes may differ; of one gap for both (as
+    the layout sets it), their mean is the one whose worst error on either axis (the
+    fidelity's measure) is smallest."""
+    fs, fr = Footprint.of_placement(s), Footprint.of_placement(r)
+    gaps = axis_gaps_m(relation, s.x, s.y, fs, r.x, r.y, fr)
+    return float(np.mean([float(g) for g in gaps]))
+
+
+def _pairs(obs: Observation) -> list[tuple[tuple[str, str], _Reading]]:
+    """Every candidate pair of ``obs`` (see the module doc), keyed ``(subject, reference)``
+    in its canonical orientation: the object with the smaller footprint (by kind, so the
+    same in every observation; ties by name) is the subject."""
+    places = {p.name: p for p in obs.placements}
+    area = {it.name: it.spec.area for it in obs.items}
+    direct = {frozenset((p.name, p.on)) for p in obs.placements if p.on is not None}
+    chained = stacked_pairs((p.name, p.on) for p in obs.placements if p.on is not None)
+    out = []
+    names = [it.name for it in obs.items]
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            pair = frozenset((a, b))
+            if pair in chained and pair not in direct:
+                continue
+            subject, reference = sorted((a, b), key=lambda n: (area[n], n))
+            s, r = places[subject], places[reference]
+            relation = relation_between(s, r)
+            gap = None if relation is None or relation in (ON_TOP_OF, UNDER) \
+                else observed_gap_m(relation, s, r)
+            out.append(((subject, reference), _Reading(
+                obs.source, relation or OVERLAPPING, gap,
+                0.0 if pair in direct else _box_distance_m(s, r))))
+    return out
+
+
+def _box_distance_m(a: Placement, b: Placement) -> float:
+    """The distance, metres, between two footprints' bounding boxes (0 where they meet)."""
+    fa, fb = Footprint.of_placement(a), Footprint.of_placement(b)
+    gx = max(abs(a.x - b.x) - fa.hx - fb.hx, 0.0)
+    gy = max(abs(a.y - b.y) - fa.hy - fb.hy, 0.0)
+    return math.hypot(gx, gy)
+
+
+def _edges(observations: Sequence[Observation], catalog: Catalog,
+           warnings: list[str]) -> list[Learned]:
+    """The main object's distance from the diner's edge, per object that is the main one
+    in some observation, learned from those observations."""
+    seen: dict[str, list[tuple[str, float, Observation]]] = {}
+    for obs in observations:
+        main = choose_origin(obs.items, ())
+        p = next(p for p in obs.placements if p.name == main)
+        gap = float(edge_gap_m(p.y, Footprint.of_placement(p), obs.place))
+        seen.setdefault(main, []).append((obs.source, gap, obs))
+    out = []
+    for main, gaps in seen.items():
+        cm = [100 * g for _, g, _ in gaps]
+        median = _cm(max(statistics.median(cm), 0.0))
+        sentence = f"the {main} {median:g} cm from the diner's edge of the table"
+        first = gaps[0][2]
+        try:
+            read = read_edge_preferences([sentence], [], first.items, catalog, first.place)
+        except BadInput:
+            read = {}
+        if set(read) != {main} or not math.isclose(read[main], median / 100):
+            warnings.append(f"cannot phrase {sentence!r} so that the preference reader "
+                            "reads it back; not learned")
+            continue
+        out.append(Learned(sentence, main, None, None, median, (_cm(min(cm)), _cm(max(cm))),
+                           tuple(source for source, _, _ in gaps)))
+    return out
+
+
+def _relation_sentence(subject: str, reference: str, seen: Sequence[_Reading],
+                       observations: Sequence[Observation], catalog: Catalog
+                       ) -> Learned | None:
+    """The learned sentence of a pair whose every reading is the same relation, phrased so
+    that the preference reader reads it back exactly; ``None`` when no phrasing does."""
+    relation = seen[0].relation
+    if relation == UNDER:  # said from the upper object, as people say it
+        subject, reference, relation = reference, subject, CONVERSE[UNDER]
+    sources = tuple(r.source for r in seen)
+    first = next(o for o in observations if o.source == sources[0])
+    if relation == ON_TOP_OF:
+        phrasings = [f"the {subject} {relation} the {reference}"]
+        gap_cm, spread = None, None
+    else:
+        cm = [100 * r.gap_m for r in seen if r.gap_m is not None]
+        gap_cm = _cm(max(statistics.median(cm), 0.0))
+        spread = (_cm(min(cm)), _cm(max(cm)))
+        # The paper's phrasing; the other where a number after the subject's name would
+        # read as part of a name ("the dinner fork 2 cm ..." beside a "dinner fork 2").
+        phrasings = [f"the {subject} {gap_cm:g} cm {relation} the {reference}",
+                     f"the {subject} {relation} the {reference}, {gap_cm:g} cm apart"]
+    for sentence in phrasings:
+        try:
+            read = read_preferences([sentence], [], first.items, catalog).relations
+        except BadInput:
+            continue
+        got = [(r.subject, r.relation, r.reference) for r in read]
+        if got == [(subject, relation, reference)] and (gap_cm is None or (
+                read[0].gap_m is not None and math.isclose(read[0].gap_m, gap_cm / 100))):
+            return Learned(sentence, subject, relation, reference, gap_cm, spread, sources)
+    return None
+
+
+def _said(subject: str, relation: str, reference: str) -> str:
+    """One reading in words: ``the mug to the left of the dinner plate``."""
+    if relation == OVERLAPPING:
+        return f"the {subject} overlapping the {reference}"
+    return f"the {subject} {relation} the {reference}"
+
+
+def _cm(value_cm: float) -> float:
+    """``value_cm`` rounded to a millimetre, as sentences and comments say it."""
+    return round(value_cm, 1) + 0.0
+
+
+def _range(spread_cm: tuple[float, float]) -> str:
+    low, high = spread_cm
+    return f"{low:g} cm" if low == high else f"{low:g} to {high:g} cm"
+
+
+def _count(names: Sequence[str]) -> str:
+    return f"{len(names)} example" + ("" if len(names) == 1 else "s")
+
+
+def _flat(text: str) -> str:
+    """``text`` on one line, for a YAML comment."""
+    return " ".join(text.split())
+
+
+def _yaml_scalar(text: str) -> str:
+    """``text`` as a YAML list entry's scalar: plain when YAML reads it back as it is,
+    else double-quoted (a JSON string is a YAML one)."""
+    try:
+        plain = yaml.safe_load(f"- {text}") == [text] and "#" not in text
+    except yaml.YAMLError:
+        plain = False
+    return text if plain else json.dumps(text, ensure_ascii=False)

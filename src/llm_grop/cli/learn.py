@@ -1,0 +1,78 @@
+"""``llm-grop learn``: a person's way of setting the table, learned from example settings
+as preference sentences (issue 42; :mod:`llm_grop.arrangement.learning`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from llm_grop.cli.logs import VERBOSE
+from llm_grop.cli.options import EPILOG, QUIET, StagedOutputs, check_outputs
+from llm_grop.errors import BadInput
+
+
+@click.command(epilog=EPILOG)
+@VERBOSE
+@click.argument("examples", metavar="EXAMPLE...", nargs=-1, required=True,
+                type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_path", required=True,
+              type=click.Path(dir_okay=False, path_type=Path),
+              help="Write the learned preferences file (YAML `preferences: [sentences]`, "
+                   "for --preferences) here.")
+@click.option("--force", is_flag=True,
+              help="Replace the --out file if it exists (a preferences file may be "
+                   "written by hand, so it is never replaced unasked).")
+@click.option("--catalog", "catalog_files", multiple=True,
+              type=click.Path(dir_okay=False, path_type=Path),
+              help="An extra object catalog file (repeatable).")
+@QUIET
+def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
+          catalog_files: tuple[Path, ...], quiet: bool) -> None:
+    """Learn how a person sets the table from EXAMPLE settings, as preference sentences.
+
+    Each EXAMPLE is a table setting: an arrangement JSON (`llm-grop arrange --json`, or
+    any system's in the same shape) or a run JSON (its `final`). What holds in every
+    example that shows both objects becomes a sentence with the median gap ("the dinner
+    fork 2 cm to the right of the dinner plate"); what the examples disagree on is
+    reported, not learned. No LLM is asked. Use the file with `--preferences`.
+    """
+    from rich.console import Console
+    from rich.table import Table as RichTable
+    from rich.text import Text
+
+    from llm_grop.arrangement.learning import learn as learn_examples
+    from llm_grop.cli.console import print_warnings
+    from llm_grop.files.jsonio import write_text
+    from llm_grop.world.catalog import Catalog
+
+    # The output is checked before any example is read.
+    check_outputs(out=out_path)
+    if out_path.exists() and not force:
+        raise BadInput(f"--out {out_path}: already exists; give --force to replace it")
+    if out_path.resolve() in {e.resolve() for e in examples}:
+        raise BadInput(f"--out {out_path}: is one of the examples")
+    catalog = Catalog.load(catalog_files)
+    learned = learn_examples(examples, catalog)
+    with StagedOutputs() as outputs:
+        outputs.write("out", out_path, lambda p: write_text(p, learned.preference_file()))
+        outputs.commit()
+    err = Console(stderr=True)
+    print_warnings([*learned.warnings, *(c.message() for c in learned.contradictions)], err)
+    if quiet:
+        return
+    out = Console()
+    table = RichTable(title=f"Learned from {len(learned.examples)} example"
+                            f"{'' if len(learned.examples) == 1 else 's'}",
+                      title_justify="left")
+    table.add_column("preference")
+    table.add_column("seen (cm)", justify="right")
+    table.add_column("examples", justify="right")
+    for s in learned.sentences:
+        seen = "" if s.spread_cm is None else \
+            f"{s.spread_cm[0]:g}" if s.spread_cm[0] == s.spread_cm[1] else \
+            f"{s.spread_cm[0]:g} to {s.spread_cm[1]:g}"
+        # Object names come from the examples: never rich markup.
+        table.add_row(Text(s.sentence), seen, str(len(s.sources)))
+    out.print(table)
+    out.print(Text(f"Wrote preferences: {out_path}"))
