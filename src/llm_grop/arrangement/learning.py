@@ -92,8 +92,8 @@ class Learned:
 @dataclass(frozen=True)
 class Contradiction:
     """A pair of neighbours whose relation differs between observations: ``readings``
-    holds each reading seen, in words (``the mug to the left of the dinner plate``), with
-    the observations it was seen in."""
+    holds each relation of ``subject`` to ``reference`` seen (or :data:`OVERLAPPING`)
+    with the observations it was seen in."""
 
     subject: str
     reference: str
@@ -101,9 +101,10 @@ class Contradiction:
 
     def message(self) -> str:
         """The contradiction in one line."""
-        seen = "; ".join(f"{said} in {', '.join(sources)}" for said, sources in self.readings)
-        return (f"the examples disagree about the {self.subject} and the {self.reference}: "
-                f"{seen}; not learned")
+        seen = "; ".join(
+            f"{relation} {f'the {self.reference}' if k == 0 else 'it'} in {', '.join(sources)}"
+            for k, (relation, sources) in enumerate(self.readings))
+        return f"the examples disagree on where the {self.subject} goes: {seen}; not learned"
 
 
 @dataclass(frozen=True)
@@ -222,8 +223,7 @@ def learn_from(observations: Sequence[Observation], catalog: Catalog) -> Learnin
         relations = list(dict.fromkeys(r.relation for r in seen))
         if len(relations) > 1:
             contradictions.append(Contradiction(subject, reference, tuple(
-                (_said(subject, rel, reference),
-                 tuple(r.source for r in seen if r.relation == rel)) for rel in relations)))
+                (rel, tuple(r.source for r in seen if r.relation == rel)) for rel in relations)))
         elif relations == [OVERLAPPING]:
             warnings.append(f"the {subject} and the {reference} overlap in "
                             f"{', '.join(r.source for r in seen)} and neither rests on the "
@@ -231,7 +231,9 @@ def learn_from(observations: Sequence[Observation], catalog: Catalog) -> Learnin
         else:
             chosen.append(((subject, reference), seen))
     sentences = [*_edges(observations, catalog, warnings)]
+    # Said in the order the examples list their objects, not in the tree's.
     chosen.sort(key=lambda kv: (order[kv[0][0]], order[kv[0][1]]))
+    contradictions.sort(key=lambda c: (order[c.subject], order[c.reference]))
     for (subject, reference), seen in chosen:
         learned = _relation_sentence(subject, reference, seen, observations, catalog)
         if learned is None:
@@ -362,13 +364,6 @@ def _relation_sentence(subject: str, reference: str, seen: Sequence[_Reading],
                 read[0].gap_m is not None and math.isclose(read[0].gap_m, gap_cm / 100))):
             return Learned(sentence, subject, relation, reference, gap_cm, spread, sources)
     return None
-
-
-def _said(subject: str, relation: str, reference: str) -> str:
-    """One reading in words: ``the mug to the left of the dinner plate``."""
-    if relation == OVERLAPPING:
-        return f"the {subject} overlapping the {reference}"
-    return f"the {subject} {relation} the {reference}"
 
 
 def _cm(value_cm: float) -> float:

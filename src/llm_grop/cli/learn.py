@@ -75,4 +75,4 @@ def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
         # Object names come from the examples: never rich markup.
         table.add_row(Text(s.sentence), seen, str(len(s.sources)))
     out.print(table)
-    out.print(Text(f"Wrote preferences: {out_path}"))
+    out.print(Text(f"Wrote preferences: {out_path}"), soft_wrap=True)
