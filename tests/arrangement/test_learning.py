@@ -290,3 +290,25 @@ def test_learning_reads_observations_as_given() -> None:
     assert [s.sentence for s in learned.sentences] == [
         "the dinner plate 6.5 cm from the diner's edge of the table",
         "the dinner fork 2 cm to the left of the dinner plate"]
+
+
+def test_each_object_is_tied_to_its_nearest_larger_neighbour() -> None:
+    # In these two settings the mug lies nearer the knife than the plate (by median).
+    docs = [arranged(LEFT_HANDED, seed) for seed in (1, 2)]
+    learned = learn(docs, catalog=CATALOG)
+    mug = next(s for s in learned.sentences if s.subject == "mug")
+    assert (mug.relation, mug.reference) == ("above and to the left of", "dinner plate")
+    assert len(learned.sentences) == 4  # the edge and one tie per object but the plate
+
+
+def test_a_big_object_on_a_small_one_closes_no_cycle() -> None:
+    from llm_grop.arrangement.examples import Observation
+
+    items = items_from_names(["dinner plate", "mug mat", "mug"], CATALOG)
+    plate = Placement("dinner plate", 0.0, -0.1, 0.0, "circle", (0.27, 0.27), on="mug mat")
+    mat = Placement("mug mat", 0.0, -0.1, 0.0, "circle", (0.11, 0.11))
+    mug = Placement("mug", 0.2, 0.1, 0.0, "circle", (0.09, 0.09))
+    learned = learn_from([Observation("hand", items, (plate, mat, mug), Table())], CATALOG)
+    assert {(s.subject, s.relation, s.reference) for s in learned.sentences} == {
+        ("dinner plate", None, None), ("dinner plate", "on top of", "mug mat"),
+        ("mug", "above and to the right of", "mug mat")}

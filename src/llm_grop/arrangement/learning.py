@@ -12,26 +12,37 @@ table is measured as :func:`~.fidelity.edge_gap_m` does.
 
 **Which pairs.** Not every pair: a setting of n objects has n(n-1)/2 pairs, most of them
 far apart and of no interest to anyone ("the fork below and to the left of the mug").
-The learner keeps a *spanning tree of nearest neighbours*: the candidate pairs are the
-pairs some observation shows together, ranked by how close they are (the median, over
-the observations showing both, of the distance between their footprints' bounding
-boxes; a stacked pair is at 0), and Kruskal's algorithm takes the closest pair that joins
-two groups not yet joined, until every object is joined. So each object is tied to its
-nearest neighbour (which a minimum spanning tree always holds), the layout can walk from
-its origin to every object along the learned relations (:mod:`.geometry` places an
-object from its relation to one placed before), and there are at most n - 1 sentences
-with no cycle, so they can never contradict each other in clingo and a configuration
-that keeps the examples' gaps exists. Two objects in one stack that do not rest on each
-other directly (the lid and the mat under its mug) are not a candidate: their relation
-follows from the stack.
+Each object is related to one other. An object that rests on another (its ``on``, in some
+observation) is related to what it rests on. Any other is related to its *nearest larger
+neighbour on the table*: the objects are ranked by footprint (the catalog kind's area,
+largest first; ties in the order the examples list them), and its reference is, among the
+objects ranked before it that never rest on another and that some observation shows with
+it, the nearest one: the smallest median, over the observations showing both, of the
+distance between their footprints' bounding boxes. Why:
 
-**What is learned.** A tree pair's relation is learned when it is the same in every
-observation that shows both objects; its gap is their median (clamped at 0), and the
-spread (min to max) is kept. A pair whose relation differs between observations is a
-:class:`Contradiction`: reported, not learned, and its objects stay joined in the tree
-(no farther pair is tried in its place, so one varying object gives one report). The
-main object's distance from the diner's edge is learned from the observations where it
-is the main object, since only the layout's origin uses that sentence.
+* people place a small thing from a bigger one ("the fork to the left of the plate") and
+  an upper thing from what it rests on ("the lid on the mug", though the lid is larger),
+  and that is how the sentences read;
+* every tie goes up the ranking or down a stack, and a stack is placed from its bottom,
+  so the pairs form a tree rooted at the setting's main object (the largest, the
+  layout's origin, which the edge sentence anchors), a big tray on a small coaster
+  included: at most n - 1 sentences, from which the layout (:mod:`.geometry`) walks to
+  every object, and with no cycle, so they can never contradict each other in clingo,
+  whatever subset of the objects a request names;
+* a relation to a larger object applies to more requests than one to a small object
+  beside it: the mug is placed from the plate, not from the knife it happens to be near,
+  so it keeps its place in a request without a knife.
+
+Two objects in one stack that do not rest on each other directly (the lid and the mat
+under its mug) are never a pair: their relation follows from the stack.
+
+**What is learned.** An object's relation to its reference is learned when it is the
+same in every observation that shows both; its gap is their median (clamped at 0), and
+the spread (min to max) is kept. A relation that differs between observations is a
+:class:`Contradiction`: reported, not learned, and no farther reference is tried in its
+place (the examples disagree about that object, so one report says so). The main
+object's distance from the diner's edge is learned from the observations where it is the
+main object, since only the layout's origin uses that sentence.
 
 Every sentence is written in the paper's phrasing and read back with the preference
 reader (:mod:`.preferences`) before it is kept, so what is learned is exactly what
@@ -176,6 +187,8 @@ def learn(examples: Sequence[str | PathLike[str] | Mapping[str, Any]],
             continue
         read.append(one)
         names.append(name)
+    if len(refused) == 1 and not read:
+        raise BadInput(refused[0])
     if not read:
         raise BadInput(f"none of the {len(refused)} examples is a table setting: "
                        + "; ".join(refused))
@@ -196,30 +209,42 @@ def _final(document: Mapping[str, Any]) -> Mapping[str, Any]:
 
 def learn_from(observations: Sequence[Observation], catalog: Catalog) -> Learning:
     """The sentences, contradictions and warnings of ``observations`` (the module doc)."""
-    readings: dict[tuple[str, str], list[_Reading]] = {}
     order: dict[str, int] = {}
+    area: dict[str, float] = {}
     for obs in observations:
         for item in obs.items:
             order.setdefault(item.name, len(order))
-        for key, reading in _pairs(obs):
+            area.setdefault(item.name, item.spec.area)
+    rank = {name: k for k, name in enumerate(sorted(order, key=lambda n: (-area[n], order[n])))}
+    readings: dict[tuple[str, str], list[_Reading]] = {}
+    for obs in observations:
+        for key, reading in _pairs(obs, rank):
             readings.setdefault(key, []).append(reading)
+    supports = {(p.name, p.on) for obs in observations for p in obs.placements
+                if p.on is not None}
+    resting = {upper for upper, _ in supports}
+
+    def may_tie(mine: str, other: str) -> bool:
+        # A resting object is tied to its support, any other to a larger object on the
+        # table: every tie then goes down a stack or up the ranking, so none closes a
+        # cycle (a big tray on a small coaster included).
+        if mine in resting:
+            return (mine, other) in supports
+        return other not in resting and rank[other] < rank[mine]
+
+    nearest: dict[str, tuple[tuple[float, int], tuple[str, str]]] = {}
+    for key, seen in readings.items():
+        for mine, other in (key, key[::-1]):
+            if not may_tie(mine, other):
+                continue
+            how_near = (statistics.median(r.distance_m for r in seen), rank[other])
+            if mine not in nearest or how_near < nearest[mine][0]:
+                nearest[mine] = (how_near, key)
     warnings: list[str] = []
     contradictions: list[Contradiction] = []
     chosen: list[tuple[tuple[str, str], list[_Reading]]] = []
-    group = {name: name for name in order}
-
-    def root(name: str) -> str:
-        while group[name] != name:
-            name = group[name]
-        return name
-
-    ranked = sorted(readings.items(), key=lambda kv: (
-        statistics.median(r.distance_m for r in kv[1]), order[kv[0][0]], order[kv[0][1]]))
-    for (subject, reference), seen in ranked:
-        a, b = root(subject), root(reference)
-        if a == b:
-            continue
-        group[a] = b
+    for subject, reference in dict.fromkeys(key for _, key in nearest.values()):
+        seen = readings[(subject, reference)]
         relations = list(dict.fromkeys(r.relation for r in seen))
         if len(relations) > 1:
             contradictions.append(Contradiction(subject, reference, tuple(
@@ -231,7 +256,7 @@ def learn_from(observations: Sequence[Observation], catalog: Catalog) -> Learnin
         else:
             chosen.append(((subject, reference), seen))
     sentences = [*_edges(observations, catalog, warnings)]
-    # Said in the order the examples list their objects, not in the tree's.
+    # Said in the order the examples list their objects.
     chosen.sort(key=lambda kv: (order[kv[0][0]], order[kv[0][1]]))
     contradictions.sort(key=lambda c: (order[c.subject], order[c.reference]))
     for (subject, reference), seen in chosen:
@@ -270,12 +295,11 @@ def observed_gap_m(relation: str, s: Placement, r: Placement) -> float:
     return float(np.mean([float(g) for g in gaps]))
 
 
-def _pairs(obs: Observation) -> list[tuple[tuple[str, str], _Reading]]:
-    """Every candidate pair of ``obs`` (see the module doc), keyed ``(subject, reference)``
-    in its canonical orientation: the object with the smaller footprint (by kind, so the
-    same in every observation; ties by name) is the subject."""
+def _pairs(obs: Observation, rank: Mapping[str, int]
+           ) -> list[tuple[tuple[str, str], _Reading]]:
+    """Every candidate pair of ``obs`` (see the module doc), keyed ``(subject, reference)``:
+    the reference is the one ranked first (``rank``, 0 first)."""
     places = {p.name: p for p in obs.placements}
-    area = {it.name: it.spec.area for it in obs.items}
     direct = {frozenset((p.name, p.on)) for p in obs.placements if p.on is not None}
     chained = stacked_pairs((p.name, p.on) for p in obs.placements if p.on is not None)
     out = []
@@ -285,7 +309,7 @@ def _pairs(obs: Observation) -> list[tuple[tuple[str, str], _Reading]]:
             pair = frozenset((a, b))
             if pair in chained and pair not in direct:
                 continue
-            subject, reference = sorted((a, b), key=lambda n: (area[n], n))
+            reference, subject = sorted((a, b), key=lambda n: rank[n])
             s, r = places[subject], places[reference]
             relation = relation_between(s, r)
             gap = None if relation is None or relation in (ON_TOP_OF, UNDER) \
