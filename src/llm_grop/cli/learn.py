@@ -67,7 +67,7 @@ def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
                       title_justify="left")
     table.add_column("preference")
     table.add_column("seen (cm)", justify="right")
-    table.add_column("examples", justify="right")
+    table.add_column("settings", justify="right")
     for s in learned.sentences:
         seen = "" if s.spread_cm is None else \
             f"{s.spread_cm[0]:g}" if s.spread_cm[0] == s.spread_cm[1] else \
