@@ -89,10 +89,12 @@ def test_a_bad_example_among_good_ones_is_a_warning(tmp_path: Path, examples, ca
     missing = tmp_path / "missing.json"
     out = tmp_path / "p.yaml"
     assert main(["learn", str(examples[0]), str(missing), str(examples[1]),
-                 "--out", str(out), "-q"]) == 0
+                 "--out", str(out)]) == 0
     err = capsys.readouterr().err.splitlines()
     assert err == [f"warning: {missing}: cannot read (No such file or directory); skipped"]
-    assert out.exists()
+    assert f"# Not learned:\n#   {missing}: cannot read" in out.read_text()
+    assert main(["learn", *map(str, examples), "--out", str(out), "--force", "-q"]) == 0
+    assert capsys.readouterr() == ("", "")
 
 
 def test_contradicting_examples_are_warned_about(tmp_path: Path, monkeypatch,
@@ -110,3 +112,6 @@ def test_contradicting_examples_are_warned_about(tmp_path: Path, monkeypatch,
         "dinner plate in left.json; above and to the right of it in usual.json; not learned"]
     assert load_preference_file("p.yaml") == (
         "the dinner plate 3.5 cm from the diner's edge of the table",)
+    assert "#   the examples disagree on where the mug goes: above and to the left of the " \
+        "dinner plate in left.json; above and to the right of it in usual.json; not " \
+        "learned\n" in Path("p.yaml").read_text()

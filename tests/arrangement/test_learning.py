@@ -312,3 +312,12 @@ def test_a_big_object_on_a_small_one_closes_no_cycle() -> None:
     assert {(s.subject, s.relation, s.reference) for s in learned.sentences} == {
         ("dinner plate", None, None), ("dinner plate", "on top of", "mug mat"),
         ("mug", "above and to the right of", "mug mat")}
+
+
+def test_an_object_a_run_left_tipped_over_is_left_out() -> None:
+    doc = arranged(USUAL, 0)
+    doc["objects"][3]["tilt_rad"] = 1.5
+    learned = learn([doc, arranged(USUAL, 1)], catalog=CATALOG)
+    assert learned.warnings == ("example 1: left out mug: tipped over",)
+    mug = next(s for s in learned.sentences if s.subject == "mug")
+    assert mug.sources == ("example 2",)

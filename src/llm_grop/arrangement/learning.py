@@ -131,12 +131,16 @@ class Learning:
 
     def preference_file(self) -> str:
         """The sentences as a preferences file (YAML ``preferences: [sentence, ...]``), each
-        with its spread and sources as a comment, under a header naming the examples."""
+        with its spread and sources as a comment, under a header naming the examples and
+        saying what was not learned (the contradictions and warnings)."""
         lines = [f"# Preferences learned by `llm-grop learn` from {_count(self.examples)}:",
                  *(f"#   {_flat(e)}" for e in self.examples),
                  "# Each sentence holds in every example that shows its objects; a distance",
-                 "# is the median of theirs, and the comment gives the range seen and where.",
-                 "preferences:" if self.sentences else "preferences: []"]
+                 "# is the median of theirs, and the comment gives the range seen and where."]
+        left_out = [*(c.message() for c in self.contradictions), *self.warnings]
+        if left_out:
+            lines += ["# Not learned:", *(f"#   {_flat(w)}" for w in left_out)]
+        lines.append("preferences:" if self.sentences else "preferences: []")
         for s in self.sentences:
             seen = "" if s.spread_cm is None else f"{_range(s.spread_cm)}; "
             lines.append(f"  - {_yaml_scalar(s.sentence)}  # {seen}"

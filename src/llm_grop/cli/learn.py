@@ -57,10 +57,11 @@ def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
     with StagedOutputs() as outputs:
         outputs.write("out", out_path, lambda p: write_text(p, learned.preference_file()))
         outputs.commit()
-    err = Console(stderr=True)
-    print_warnings([*learned.warnings, *(c.message() for c in learned.contradictions)], err)
     if quiet:
         return
+    # What was not learned is also said in the file's header.
+    print_warnings([*learned.warnings, *(c.message() for c in learned.contradictions)],
+                   Console(stderr=True))
     out = Console()
     table = RichTable(title=f"Learned from {len(learned.examples)} example"
                             f"{'' if len(learned.examples) == 1 else 's'}",
