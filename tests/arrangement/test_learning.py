@@ -23,14 +23,14 @@ from learning_support import (
     write_example,
 )
 from llm_grop import BackendOptions, arrange, learn, run
-from llm_grop.arrangement.examples import OFF_TABLE_SLACK_M, read_example
-from llm_grop.arrangement.fidelity import GAP_TOLERANCE_M, edge_gap_m
-from llm_grop.arrangement.learning import (
-    Learning,
-    learn_from,
+from llm_grop.arrangement.examples import (
+    OFF_TABLE_SLACK_M,
     observed_gap_m,
+    read_example,
     relation_between,
 )
+from llm_grop.arrangement.fidelity import GAP_TOLERANCE_M, edge_gap_m
+from llm_grop.arrangement.learning import Learning, learn_from
 from llm_grop.arrangement.predicates import Footprint
 from llm_grop.arrangement.preferences import load_preference_file, read_preferences
 from llm_grop.contract.run_json import run_to_dict

@@ -19,17 +19,22 @@ off the table or resting on an object the example does not hold) is refused with
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from llm_grop.arrangement.diners import in_place_frames
-from llm_grop.arrangement.predicates import Footprint, inside_table
+from llm_grop.arrangement.fidelity import axis_gaps_m
+from llm_grop.arrangement.predicates import Footprint, inside_table, pair_relation_holds
 from llm_grop.contract.serialize import arrangement_from_dict, read_arrangement_file
 from llm_grop.errors import BadInput
 from llm_grop.world.arrangement import Item, Placement
 from llm_grop.world.catalog import Catalog, ObjectSpec, instance_kind
+from llm_grop.world.relation import MEANINGS, ON_TOP_OF, UNDER
 from llm_grop.world.request import items_from_names
 from llm_grop.world.table import Table
 
@@ -154,3 +159,42 @@ def _with_catalog_sizes(data: Mapping[str, Any], catalog: Catalog) -> Mapping[st
                 o = {"shape": spec.shape, "size": list(spec.size)} | o
         filled.append(o)
     return {**data, "objects": filled}
+
+
+#: The relations read from where two objects lie (all but stacking, read from ``on``, and
+#: ``center``, which is about the table, not a pair).
+_LYING = tuple(m.name for m in MEANINGS.values() if m.reference and m.rests is None)
+
+
+def relation_between(s: Placement, r: Placement) -> str | None:
+    """The relation ``s`` (subject) keeps to ``r`` (reference) where they lie: ``on top of``
+    or ``under`` when one rests on the other (``on``), else the one relation of
+    ``relations.yaml`` whose axis states hold; ``None`` when they overlap on both axes
+    without resting on each other."""
+    if s.on == r.name:
+        return ON_TOP_OF
+    if r.on == s.name:
+        return UNDER
+    fs, fr = Footprint.of_placement(s), Footprint.of_placement(r)
+    for name in _LYING:
+        if bool(pair_relation_holds(name, s.x, s.y, fs, r.x, r.y, fr)):
+            return name
+    return None
+
+
+def observed_gap_m(relation: str, s: Placement, r: Placement) -> float:
+    """The gap, metres, between ``s`` and ``r`` for ``relation`` (not stacking), edge to
+    edge as the layout sets it. A diagonal's two axes may differ; of one gap for both (as
+    the layout sets it), their mean is the one whose worst error on either axis (the
+    fidelity's measure) is smallest."""
+    fs, fr = Footprint.of_placement(s), Footprint.of_placement(r)
+    gaps = axis_gaps_m(relation, s.x, s.y, fs, r.x, r.y, fr)
+    return float(np.mean([float(g) for g in gaps]))
+
+
+def box_distance_m(a: Placement, b: Placement) -> float:
+    """The distance, metres, between two footprints' bounding boxes (0 where they meet)."""
+    fa, fb = Footprint.of_placement(a), Footprint.of_placement(b)
+    gx = max(abs(a.x - b.x) - fa.hx - fb.hx, 0.0)
+    gy = max(abs(a.y - b.y) - fa.hy - fb.hy, 0.0)
+    return math.hypot(gx, gy)

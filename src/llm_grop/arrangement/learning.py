@@ -1,7 +1,8 @@
 """Learning a person's way of setting the table from a few example settings, exactly and
 without an LLM (issue 42, its first step).
 
-Each diner's setting in each example (an :class:`~.examples.Observation`) is read with
+Each diner's setting in each example (an :class:`~.examples.Observation`) is read
+(:func:`~.examples.relation_between`, :func:`~.examples.observed_gap_m`) with
 the one meaning of each relation (``world/relations.yaml``, tested by
 :func:`~llm_grop.arrangement.predicates.pair_relation_holds`): between two objects the one
 relation whose axis states hold, or ``on top of`` when one rests on the other (its
@@ -60,22 +61,25 @@ from os import PathLike
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import yaml
 
-from llm_grop.arrangement.examples import Example, Observation, read_example, read_example_file
-from llm_grop.arrangement.fidelity import axis_gaps_m, edge_gap_m
+from llm_grop.arrangement.examples import (
+    Example,
+    Observation,
+    box_distance_m,
+    observed_gap_m,
+    read_example,
+    read_example_file,
+    relation_between,
+)
+from llm_grop.arrangement.fidelity import edge_gap_m
 from llm_grop.arrangement.geometry import choose_origin
-from llm_grop.arrangement.predicates import Footprint, pair_relation_holds, stacked_pairs
+from llm_grop.arrangement.predicates import Footprint, stacked_pairs
 from llm_grop.arrangement.preferences import read_edge_preferences, read_preferences
 from llm_grop.errors import BadInput
-from llm_grop.world.arrangement import Placement
 from llm_grop.world.catalog import Catalog
-from llm_grop.world.relation import CONVERSE, MEANINGS, ON_TOP_OF, UNDER
+from llm_grop.world.relation import CONVERSE, ON_TOP_OF, UNDER
 
-#: The relations read from where two objects lie (all but stacking, read from ``on``, and
-#: ``center``, which is about the table, not a pair).
-_LYING = tuple(m.name for m in MEANINGS.values() if m.reference and m.rests is None)
 #: The reading of two objects that overlap on both axes without one resting on the other.
 OVERLAPPING = "overlapping"
 
@@ -273,32 +277,6 @@ def learn_from(observations: Sequence[Observation], catalog: Catalog) -> Learnin
     return Learning(tuple(sentences), tuple(contradictions), tuple(warnings))
 
 
-def relation_between(s: Placement, r: Placement) -> str | None:
-    """The relation ``s`` (subject) keeps to ``r`` (reference) where they lie: ``on top of``
-    or ``under`` when one rests on the other (``on``), else the one relation of
-    ``relations.yaml`` whose axis states hold; ``None`` when they overlap on both axes
-    without resting on each other."""
-    if s.on == r.name:
-        return ON_TOP_OF
-    if r.on == s.name:
-        return UNDER
-    fs, fr = Footprint.of_placement(s), Footprint.of_placement(r)
-    for name in _LYING:
-        if bool(pair_relation_holds(name, s.x, s.y, fs, r.x, r.y, fr)):
-            return name
-    return None
-
-
-def observed_gap_m(relation: str, s: Placement, r: Placement) -> float:
-    """The gap, metres, between ``s`` and ``r`` for ``relation`` (not stacking), edge to
-    edge as the layout sets it. A diagonal's two axes may differ; of one gap for both (as
-    the layout sets it), their mean is the one whose worst error on either axis (the
-    fidelity's measure) is smallest."""
-    fs, fr = Footprint.of_placement(s), Footprint.of_placement(r)
-    gaps = axis_gaps_m(relation, s.x, s.y, fs, r.x, r.y, fr)
-    return float(np.mean([float(g) for g in gaps]))
-
-
 def _pairs(obs: Observation, rank: Mapping[str, int]
            ) -> list[tuple[tuple[str, str], _Reading]]:
     """Every candidate pair of ``obs`` (see the module doc), keyed ``(subject, reference)``:
@@ -320,16 +298,8 @@ def _pairs(obs: Observation, rank: Mapping[str, int]
                 else observed_gap_m(relation, s, r)
             out.append(((subject, reference), _Reading(
                 obs.source, relation or OVERLAPPING, gap,
-                0.0 if pair in direct else _box_distance_m(s, r))))
+                0.0 if pair in direct else box_distance_m(s, r))))
     return out
-
-
-def _box_distance_m(a: Placement, b: Placement) -> float:
-    """The distance, metres, between two footprints' bounding boxes (0 where they meet)."""
-    fa, fb = Footprint.of_placement(a), Footprint.of_placement(b)
-    gx = max(abs(a.x - b.x) - fa.hx - fb.hx, 0.0)
-    gy = max(abs(a.y - b.y) - fa.hy - fb.hy, 0.0)
-    return math.hypot(gx, gy)
 
 
 def _edges(observations: Sequence[Observation], catalog: Catalog,
