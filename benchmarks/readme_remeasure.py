@@ -98,6 +98,8 @@ STEPS: tuple[Step, ...] = (
        note="GROP over 100 seeds (about 3 minutes)"),
     _t("family-planning", ("**Planning time as the table grows**",),
        "python benchmarks/family_planning.py", note="about 1.5 minutes"),
+    _t("learn-time", ("**Learning from 3 examples**",),
+       "python benchmarks/learn_time.py", note="a few seconds"),
     _d("hard-scenes", ("**The hard-scene suite**",),
        "python benchmarks/hard_scenes.py --seeds 10", note="the stand-in's rows"),
     _d("hard-scenes-embedded", ("**The hard-scene suite**",),

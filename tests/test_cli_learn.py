@@ -115,3 +115,46 @@ def test_contradicting_examples_are_warned_about(tmp_path: Path, monkeypatch,
     assert "#   the examples disagree on where the mug goes: above and to the left of the " \
         "dinner plate in left.json; above and to the right of it in usual.json; not " \
         "learned\n" in Path("p.yaml").read_text()
+
+
+def test_arrange_with_examples_keeps_the_style_and_says_where_it_was_learned(
+        tmp_path: Path, examples) -> None:
+    """``--examples`` learns as ``learn`` does and applies the sentences directly; each
+    relation they give is ``learned``, with the settings it was read off."""
+    out = tmp_path / "a.json"
+    request = "a dinner plate, a dinner fork and a dinner knife"
+    flags = [a for e in examples for a in ("--examples", str(e))]
+    assert main(["arrange", request, *flags, "--llm", "replay", "--replay", str(NO_CALLS),
+                 "--seed", "5", "--json", str(out), "-q"]) == 0
+    doc = json.loads(out.read_text())
+    got = {(r["subject"], r["relation"], r["reference"]): r for r in doc["relations"]}
+    assert set(got) == {("dinner fork", "to the right of", "dinner plate"),
+                        ("dinner knife", "to the left of", "dinner plate")}
+    assert all(r["source"] == "learned" and r["examples"] == [str(e) for e in examples]
+               for r in got.values())
+    plate, fork = (next(o for o in doc["objects"] if o["name"] == n)
+                   for n in ("dinner plate", "dinner fork"))
+    assert fork["x"] > plate["x"]
+
+
+def test_examples_that_disagree_are_a_warning_of_the_run(tmp_path: Path, capsys) -> None:
+    mixed = [write_example(tmp_path / "left.json", LEFT_HANDED, 1),
+             write_example(tmp_path / "usual.json", USUAL, 2)]
+    out = tmp_path / "a.json"
+    flags = [a for e in mixed for a in ("--examples", str(e))]
+    prefs = ["--prefer", "the dinner fork 2 cm to the left of the dinner plate",
+             "--prefer", "the dinner knife 2 cm to the right of the dinner plate"]
+    assert main(["arrange", "a dinner plate, a dinner fork and a dinner knife", *flags,
+                 *prefs, "--llm", "replay", "--replay", str(NO_CALLS), "--json", str(out),
+                 "-q"]) == 0
+    warnings = json.loads(out.read_text())["warnings"]
+    assert any(w.startswith("--examples: the examples disagree on where the dinner fork")
+               for w in warnings)
+
+
+def test_a_bad_example_stops_arrange_before_any_work(tmp_path: Path, capsys) -> None:
+    bad = tmp_path / "empty.json"
+    bad.write_text("{}", encoding="utf-8")
+    assert main(["arrange", SETTING, "--examples", str(bad), "--llm", "replay", "--replay",
+                 str(NO_CALLS)]) == 2
+    assert str(bad) in one_line_error(capsys)

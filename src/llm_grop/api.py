@@ -169,7 +169,7 @@ def arrange(request: str | None = None, settings: RunSettings | None = None, *,
     job = RunInputs.of(settings, llm, None, overrides | {"record": record})
     s = job.settings
     catalog = catalog or Catalog.load(s.catalog_files)
-    options = arrange_options(s, job.bases.arrange)
+    options = arrange_options(s, job.bases.arrange, catalog)
     top = seat_diners(job.table or Table(), s)
     log = job.log()
     reading = _understand(request, s, catalog, job.tasks, log, on_event, top)
@@ -251,7 +251,7 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
     catalog = catalog or Catalog.load(s.catalog_files)
     tasks = job.tasks if job.tasks is not None or not s.task_files \
         else load_tasks(s.task_files)
-    options = arrange_options(s, job.bases.arrange)
+    options = arrange_options(s, job.bases.arrange, catalog)
     chosen = get_method(s.method, dict(s.method_options))
     feasibility_profile(s.feasibility)  # an unknown profile is reported before any work
     planner = planner_options(s, job.bases.planner)

@@ -28,6 +28,7 @@ from llm_grop.llm.cache import LLMCache
 from llm_grop.llm.registry import BACKENDS, create_llm
 from llm_grop.planning.utility import GropOptions
 from llm_grop.settings import DEFAULTS, RunSettings
+from llm_grop.world.catalog import Catalog
 from llm_grop.world.scene import Scene
 from llm_grop.world.table import Table
 from llm_grop.world.tasks import Task
@@ -116,9 +117,11 @@ def _from_arrange_options(options: ArrangeOptions) -> dict[str, Any]:
     return out
 
 
-def arrange_options(s: RunSettings, base: ArrangeOptions | None = None) -> ArrangeOptions:
+def arrange_options(s: RunSettings, base: ArrangeOptions | None = None,
+                    catalog: Catalog | None = None) -> ArrangeOptions:
     """The arrangement's options the record ``s`` sets, on ``base``'s others; the
-    preferences file is read here (a bad one is :class:`BadInput` naming it)."""
+    preferences file is read here, and the example settings learned from with ``catalog``
+    (default: the record's) (a bad one is :class:`BadInput` naming it)."""
     from llm_grop.arrangement.preferences import load_preference_file
 
     base = base or ArrangeOptions()
@@ -127,7 +130,19 @@ def arrange_options(s: RunSettings, base: ArrangeOptions | None = None) -> Arran
     examples = "" if s.zero_shot else (base.examples if base.examples != "" else None)
     return replace(base, m=s.m, max_attempts=s.attempts, examples=examples, notes=s.notes,
                    params=sampling(s), preferences=s.preferences, preference_pool=pool,
-                   revisions=s.revisions)
+                   revisions=s.revisions, **_learned(s, catalog))
+
+
+def _learned(s: RunSettings, catalog: Catalog | None) -> dict[str, Any]:
+    """The learned sentences and warnings of the record's example settings, by field."""
+    from llm_grop.arrangement.learning import learn
+
+    if not s.examples:
+        return {}
+    learning = learn(list(s.examples), catalog or Catalog.load(s.catalog_files))
+    return {"learned": tuple((x.sentence, x.sources) for x in learning.sentences),
+            "learned_warnings": tuple(f"--examples: {w}" for w in learning.warnings)
+            + tuple(f"--examples: {c.message()}" for c in learning.contradictions)}
 
 
 def sampling(s: RunSettings) -> SamplingParams:

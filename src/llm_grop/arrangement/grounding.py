@@ -38,8 +38,10 @@ def stated_for(items: Sequence[Item], options: ArrangeOptions, catalog: Catalog)
                    for r in rels)
 
     said = [r for r in options.stated if ours([r])]
-    read = preferences.read_preferences(options.preferences, options.preference_pool, items,
-                                        catalog)
+    learned = dict(options.learned)
+    read = preferences.read_preferences(options.preferences,
+                                        (*options.preference_pool, *learned), items, catalog,
+                                        learned)
     prefs = preferences.combine(said, read.relations)
     choices = tuple(c for c in (*options.choices, *read.choices)
                     if all(ours(option) for option in c.options))
@@ -120,8 +122,9 @@ def _edge_distance(items: Sequence[Item], accepted: Sequence[Relation], table: T
     else ``known``'s for the same origin, else the LLM's answer, else
     :data:`~llm_grop.arrangement.distances.DEFAULT_EDGE_GAP_CM`."""
     options = g.options
-    edges = preferences.read_edge_preferences(options.preferences, options.preference_pool,
-                                              items, g.catalog, table)
+    edges = preferences.read_edge_preferences(
+        options.preferences, (*options.preference_pool, *(s for s, _ in options.learned)),
+        items, g.catalog, table)
     origin = geometry.choose_origin(items, accepted, anchored=edges)
     warnings += [f"unused: a distance from the diner's edge applies to the origin "
                  f"({origin}), not to {name}" for name in edges if name != origin]

@@ -44,6 +44,11 @@ class ArrangeOptions:
     ``reach``: when given, a sampling whose every configuration puts an object out of the
     robot's reach is a failure told to the LLM, while rounds are left (one setting only; a
     table of several diners is not checked); ``None``: planning finds it.
+    ``learned``: sentences learned from example settings (``--examples``;
+    :mod:`llm_grop.arrangement.learning`), each with the settings it was read off; they
+    apply as ``preference_pool``'s do, as relations of source ``learned``.
+    ``learned_warnings``: what learning them warned of, added to the arrangement's
+    warnings.
     """
 
     m: int = DEFAULTS.m
@@ -59,3 +64,5 @@ class ArrangeOptions:
     choices: tuple[Choice, ...] = ()
     revisions: int | None = DEFAULTS.revisions
     reach: Reach | None = None
+    learned: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    learned_warnings: tuple[str, ...] = ()

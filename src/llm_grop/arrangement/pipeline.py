@@ -327,7 +327,7 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
         warnings = setting.warnings + one.warnings
         attempts, dropped, gaps = setting.attempts, setting.dropped, setting.gaps
         edge_gap = setting.edge_gap_m
-    warnings += tuple(feedback.warnings)
+    warnings += tuple(feedback.warnings) + options.learned_warnings
     arrangement = Arrangement(
         request=request, table=table, placements=configs[0].placements,
         relations=relations_all,

@@ -17,7 +17,7 @@ layout (:mod:`llm_grop.arrangement.geometry`) and the LLM is not asked for the d
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Annotated
@@ -126,18 +126,24 @@ def _refused(param: str | None, sentence: str, why: str) -> BadInput:
     return BadInput(f"{sentence!r}: {why}", param=param)
 
 
-def _with_gap(relation: Relation, sentence: str, param: str | None) -> Relation:
-    """``relation`` as a preference, with the distance ``sentence`` states, if any."""
+def _with_gap(relation: Relation, sentence: str, param: str | None,
+              learned_from: Sequence[str] = ()) -> Relation:
+    """``relation`` as a preference, with the distance ``sentence`` states, if any; as a
+    learned one when it was read off the example settings ``learned_from``."""
     if _NEGATIVE.search(sentence):
         raise _refused(param, sentence, "a distance must not be negative")
     cm = parse_distance_cm(sentence)
-    return replace(relation, source="preference", gap_m=None if cm is None else cm / 100)
+    return replace(relation, source="learned" if learned_from else "preference",
+                   gap_m=None if cm is None else cm / 100, learned_from=tuple(learned_from))
 
 
 def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequence[Item],
-                     catalog: Catalog) -> Preferences:
+                     catalog: Catalog, learned: Mapping[str, Sequence[str]] | None = None
+                     ) -> Preferences:
     """The relations of the ``required`` sentences (each must name requested objects, else
-    :class:`BadInput`) and of those ``pool`` sentences whose objects are all requested.
+    :class:`BadInput`) and of those ``pool`` sentences whose objects are all requested. A
+    pool sentence ``learned`` maps to the example settings it was read off gives learned
+    relations (``source="learned"``).
 
     Raises :class:`BadInput` when the preferences contradict each other, or state a
     negative distance.
@@ -157,7 +163,8 @@ def read_preferences(required: Sequence[str], pool: Sequence[str], items: Sequen
     for sentence in pool:
         parsed = parse_relations(sentence, items, catalog)
         if (parsed.relations or parsed.choices) and not parsed.ignored:
-            out += [_with_gap(r, sentence, None) for r in parsed.relations]
+            seen = (learned or {}).get(sentence, ())
+            out += [_with_gap(r, sentence, None, seen) for r in parsed.relations]
             choices += [_choice(c, sentence, None) for c in parsed.choices]
             continue
         # Not about the requested objects; it must still read as a relation at all.
@@ -191,7 +198,8 @@ def combine(stated: Sequence[Relation], preferences: Sequence[Relation]
     return tuple(unique)
 
 
-_FROM = {"request": "the request", "preference": "a preference", "llm": "the LLM"}
+_FROM = {"request": "the request", "preference": "a preference", "llm": "the LLM",
+         "learned": "the examples"}
 
 
 def contradiction(conflict: Sequence[Relation | Choice]) -> str:

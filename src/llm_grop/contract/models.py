@@ -118,10 +118,11 @@ class RelationDoc(Doc):
     relation: RelationName
     reference: Name | None
     line: Text | None = None
-    source: Literal["llm", "preference", "request", "revision"] | None = Field(
+    source: Literal["llm", "preference", "request", "revision", "learned"] | None = Field(
         None, description="where the relation came from: the LLM's answer, a stated "
-                          "preference, the request's own words, or the LLM's revision after "
-                          "a failure was explained to it (with `revision`)")
+                          "preference, the request's own words, the LLM's revision after "
+                          "a failure was explained to it (with `revision`), or example "
+                          "settings it was learned from (with `examples`)")
     words: Text | None = Field(None, description="the request's words that state it "
                                                  "(source request)")
     gap_m: Num | None = Field(None, description="the gap between the objects' edges the "
@@ -130,6 +131,9 @@ class RelationDoc(Doc):
         None, description="the round of the feedback loop (`revisions[].round`) whose answer "
                           "first stated it, after a failure was explained to the LLM (source "
                           "revision); absent: the LLM's first answer, or another source")
+    examples: list[Text] | None = Field(
+        None, description="the example settings a learned relation was read off (source "
+                          "learned): their files, and `(diner k)` for one diner's setting")
 
 
 class LLMCallDoc(Doc):

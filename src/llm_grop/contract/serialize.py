@@ -52,6 +52,8 @@ def _relation(rel: Relation, line: bool = False) -> RelationDoc:
         extra["gap_m"] = rounded(rel.gap_m)
     if rel.revision is not None:
         extra["revision"] = rel.revision
+    if rel.learned_from:
+        extra["examples"] = list(rel.learned_from)
     return RelationDoc(subject=rel.subject, relation=rel.relation, reference=rel.reference,
                        source=rel.source, **extra)
 
@@ -136,7 +138,8 @@ def arrangement_from_dict(data: Mapping[str, Any], where: str = "arrangement") -
     try:
         relations = tuple(Relation(r.subject, r.relation, r.reference, r.words or "",
                                    source=r.source or "llm", gap_m=r.gap_m,
-                                   revision=r.revision)
+                                   revision=r.revision,
+                                   learned_from=tuple(r.examples or ()))
                           for r in doc.relations)
     except ValueError as exc:
         raise BadInput(f"{where}: relations: {exc}") from None

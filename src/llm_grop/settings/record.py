@@ -188,6 +188,11 @@ class RunSettings(BaseModel):
         None, "YAML file `preferences: [sentences]`; those whose objects are all requested "
               "apply.", group="llm",
         door=Door(cli="--preferences", sweep="preferences", path="file"))
+    examples: tuple[str, ...] = setting(
+        (), "An example table setting (an arrangement JSON, or a run JSON's final) to learn "
+            "preferences from, as `llm-grop learn` does: what holds in every example applies "
+            "as --preferences does, and its relations say source learned (repeatable).",
+        group="llm", door=Door(metavar="FILE", path="file"))
     guess: bool = setting(
         True, "Refuse a request the LLM would have to complete: objects it does not name "
               "(a meal, 'coffee'), or how many.", group="guess",

@@ -216,7 +216,7 @@ ASP_NAME: dict[str, str] = {n: m.asp for n, m in MEANINGS.items()}
 
 #: Where a relation came from: the LLM's answer, a preference the user stated
 #: (``--prefer`` or a preferences file), or the request's own words ("a mug on a coaster").
-SOURCES: tuple[str, ...] = ("llm", "preference", "request", "revision")
+SOURCES: tuple[str, ...] = ("llm", "preference", "request", "revision", "learned")
 
 
 @dataclass(frozen=True)
@@ -229,7 +229,9 @@ class Relation:
     distance the user stated for it (the gap between the objects' edges, metres), else
     ``None``. ``revision`` is the round of the feedback loop whose answer first stated it
     (:mod:`llm_grop.world.failure`; its ``source`` is then ``"revision"``), ``None`` for
-    the LLM's first answer and other sources.
+    the LLM's first answer and other sources. ``learned_from`` names the example settings
+    a learned relation was read off (``source`` ``"learned"``;
+    :mod:`llm_grop.arrangement.learning`).
     """
 
     subject: str
@@ -239,6 +241,7 @@ class Relation:
     source: str = "llm"
     gap_m: float | None = None
     revision: int | None = None
+    learned_from: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.relation not in RELATION_NAMES:
@@ -259,7 +262,7 @@ class Relation:
         if self.reference is None:
             raise ValueError("'center' has no converse")
         return Relation(self.reference, CONVERSE[self.relation], self.subject, self.line,
-                        self.source, self.gap_m, self.revision)
+                        self.source, self.gap_m, self.revision, self.learned_from)
 
     def key(self) -> tuple[str, str, str | None]:
         """``(subject, relation, reference)`` without the source line."""
