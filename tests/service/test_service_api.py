@@ -344,3 +344,32 @@ def test_serve_offers_what_llm_auto_finds_at_start(tmp_path: Path, chat_server,
     log = (tmp_path / "jobs.sqlite.log").read_text()
     assert f"--llm auto: using openai local-model: a server answered on 127.0.0.1:{port}" \
         in log
+
+
+def test_preferences_learned_from_example_settings(server: Server) -> None:
+    """``POST /v1/preferences`` learns as ``llm-grop learn`` does, from the settings in the
+    body."""
+    from learning_support import LEFT_HANDED, arranged
+
+    examples = [arranged(LEFT_HANDED, seed) for seed in (1, 2)]
+    with server.client() as c:
+        answer = c.post("/v1/preferences", json={"examples": examples})
+    assert answer.status_code == 200, answer.text
+    data = answer.json()
+    sentences = [p["sentence"] for p in data["preferences"]]
+    assert any(s.startswith("the dinner fork ") and s.endswith(" to the right of the dinner "
+                                                               "plate") for s in sentences)
+    assert all(p["examples"] == ["example 1", "example 2"] for p in data["preferences"])
+    assert data["file"].startswith("# Preferences learned") and data["not_learned"] == []
+
+
+@pytest.mark.parametrize(("body", "needle"), [
+    ({"examples": []}, "examples: must not be empty"),
+    ({"examples": [{}]}, "example 1: "),
+    ({"examples": [{"objects": []}], "seed": 1}, "seed: unknown key"),
+])
+def test_bad_examples_are_one_line(server: Server, body: dict, needle: str) -> None:
+    with server.client() as c:
+        answer = c.post("/v1/preferences", json=body)
+    assert answer.status_code in (400, 422), answer.text
+    assert needle in answer.json()["error"]

@@ -37,9 +37,12 @@ from llm_grop.service.models import (
     ErrorAnswer,
     Info,
     JobAnswer,
+    LearnedPreference,
     Pending,
     PlanAnswer,
     PlanBody,
+    PreferencesAnswer,
+    PreferencesBody,
     RunBody,
     one_line,
 )
@@ -245,13 +248,27 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
         return Response(data[first:last + 1], status_code=206, media_type=media,
                         headers=headers)
 
+    @app.post("/v1/preferences", response_model=PreferencesAnswer, responses=_ERRORS,
+              summary="Learn preferences from example table settings")
+    def post_preferences(body: PreferencesBody) -> PreferencesAnswer:
+        from llm_grop.arrangement.learning import learn
+        from llm_grop.world.catalog import Catalog
+
+        learned = learn(body.examples, Catalog.load())
+        return PreferencesAnswer(
+            preferences=[LearnedPreference(sentence=s.sentence, gap_cm=s.gap_cm,
+                                           spread_cm=s.spread_cm, examples=list(s.sources))
+                         for s in learned.sentences],
+            not_learned=[c.message() for c in learned.contradictions],
+            warnings=list(learned.warnings), file=learned.preference_file())
+
     add_playground(app, service)
     return app
 
 
 #: The body each endpoint takes, whose keys an unknown one is matched against.
 _BODIES: dict[str, type[BaseModel]] = {"/v1/arrangements": ArrangeBody, "/v1/plans": PlanBody,
-                                       "/v1/runs": RunBody}
+                                       "/v1/runs": RunBody, "/v1/preferences": PreferencesBody}
 
 
 async def _events(jobs: JobStore, job_id: str, after: int) -> AsyncIterator[str]:

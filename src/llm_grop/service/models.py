@@ -255,3 +255,35 @@ def one_line(errors: Sequence[Any], raw: Any = None, model: Any = None,
     as ``field: reason``, in the words of the project's data files
     (:func:`~llm_grop.datafile.problem_line`)."""
     return problem_line(errors, raw, model, where=where)
+
+
+class PreferencesBody(_Body):
+    """``POST /v1/preferences``: learn a person's way of setting the table from example
+    settings, as ``llm-grop learn`` does."""
+
+    examples: list[dict[str, Any]] = Field(
+        min_length=1, max_length=20,
+        description="table settings: each the contract's arrangement JSON, or a run JSON "
+                    "(its `final`, what was set); one or several diners")
+
+
+class LearnedPreference(BaseModel):
+    """One learned sentence: its gap's median and the smallest and largest seen,
+    centimetres (``null`` for stacking and a distance from the diner's edge has its own),
+    and the settings it holds in (``example N``, with ``(diner k)`` for one diner's)."""
+
+    sentence: str
+    gap_cm: float | None
+    spread_cm: tuple[float, float] | None
+    examples: list[str]
+
+
+class PreferencesAnswer(BaseModel):
+    """``POST /v1/preferences``' answer: the learned sentences, what the examples disagree
+    on (not learned), the warnings, and the preferences file (YAML, for
+    ``--preferences``)."""
+
+    preferences: list[LearnedPreference]
+    not_learned: list[str]
+    warnings: list[str]
+    file: str
