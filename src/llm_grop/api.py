@@ -26,6 +26,7 @@ from llm_grop.assembly import (
     open_recordings,
     planner_options,
     resolve_feasibility,
+    resolve_llm,
     sampling,
     seat_diners,
     seat_scene_diners,
@@ -344,18 +345,42 @@ def _given_items(arrangement: Arrangement, catalog: Catalog) -> tuple[Item, ...]
     return tuple(items)
 
 
-def learn(examples: Sequence[str | PathLike[str] | Mapping[str, Any]], *,
-          catalog: Catalog | None = None) -> Learning:
-    """A person's way of setting the table, learned from ``examples`` without an LLM: each
-    an arrangement or run JSON file, or such a document parsed (a run's ``final`` is
-    read). The result's sentences are preferences (write
+def learn(examples: Sequence[str | PathLike[str] | Mapping[str, Any]],
+          settings: RunSettings | None = None, *, catalog: Catalog | None = None,
+          generalise: bool = False, llm: str | LLM | CallLog | None = None,
+          **overrides: Any
+          ) -> Learning:
+    """A person's way of setting the table, learned from ``examples``: each an arrangement
+    or run JSON file, or such a document parsed (a run's ``final`` is read). The result's
+    sentences are preferences (write
     :meth:`~llm_grop.arrangement.learning.Learning.preference_file` to a file for
     ``preferences_file``); see :mod:`llm_grop.arrangement.learning`. With several
     examples, one that is not a table setting is a warning; :class:`BadInput` when none is.
+
+    With ``generalise``, the run's LLM (``llm``, else the record's ``llm`` setting, with
+    ``overrides`` as :func:`arrange` takes them) is asked for rules for the catalog's
+    objects the examples do not show (:mod:`llm_grop.arrangement.generalising`, seed
+    ``seed``). When ``--llm auto`` finds no capable model (it would fall back to the
+    bundled SmolLM2-135M), only the exact sentences are learned, with one warning.
     """
+    from llm_grop.arrangement.generalising import generalise as with_rules
     from llm_grop.arrangement.learning import learn as learn_examples
 
-    return learn_examples(examples, catalog or Catalog.load())
+    job = RunInputs.of(settings, llm, None, overrides)
+    s = job.settings
+    catalog = catalog or Catalog.load(s.catalog_files)
+    learned = learn_examples(examples, catalog)
+    if not generalise:
+        return learned
+    if job.llm is None:
+        s, choice = resolve_llm(s)
+        if choice is not None and choice.weak:
+            return replace(learned, warnings=learned.warnings + (
+                f"no capable model to generalise with ({choice.why}): only the exact "
+                "sentences are learned; start Ollama, llama.cpp's llama-server or vLLM, or "
+                "pass --base-url URL",))
+        job = replace(job, settings=s)
+    return with_rules(learned, job.log(), catalog, s.seed, sampling(s))
 
 
 def plan_to_dict(planned: PlanResult) -> dict[str, Any]:

@@ -30,6 +30,8 @@ stage                  what it seeds                                          pa
 ``bootstrap``          the resamples of a paired comparison's confidence      pair
                        interval (a bench's summary, a human report)
 ``rescue``             the spots drawn for an object the feedback loop moves
+``llm.generalise``     the call asking for general rules from the preferences  0
+                       learned from examples
 ====================== ====================================================== ==========
 
 OMPL takes its seed through a process-wide setting; the planner sets it, from the ``ompl``
@@ -63,6 +65,7 @@ STAGES: dict[str, int] = {
     "llm.reading": 20,
     "llm.revision": 21,
     "rescue": 22,
+    "llm.generalise": 23,
 }
 
 

@@ -4,11 +4,14 @@ as preference sentences (issue 42; :mod:`llm_grop.arrangement.learning`)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import click
 
+from llm_grop.cli.execution import NO_CACHE, cache_setting
 from llm_grop.cli.logs import VERBOSE
 from llm_grop.cli.options import EPILOG, QUIET, StagedOutputs, check_outputs
+from llm_grop.cli.settings import LLM_FIELDS, checked_settings, flags
 from llm_grop.errors import BadInput
 
 
@@ -26,22 +29,30 @@ from llm_grop.errors import BadInput
 @click.option("--catalog", "catalog_files", multiple=True,
               type=click.Path(dir_okay=False, path_type=Path),
               help="An extra object catalog file (repeatable).")
+@click.option("--exact", is_flag=True,
+              help="Learn only what the examples show: ask no LLM for rules about the "
+                   "catalog's other objects.")
+@flags(*LLM_FIELDS, "seed", "cache", help={"seed": "Seed of the LLM's call."})
+@NO_CACHE
 @QUIET
 def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
-          catalog_files: tuple[Path, ...], quiet: bool) -> None:
+          catalog_files: tuple[Path, ...], exact: bool, quiet: bool, no_cache: bool,
+          **params: Any) -> None:
     """Learn how a person sets the table from EXAMPLE settings, as preference sentences.
 
     Each EXAMPLE is a table setting: an arrangement JSON (`llm-grop arrange --json`, or
     any system's in the same shape) or a run JSON (its `final`). What holds in every
     example that shows both objects becomes a sentence with the median gap ("the dinner
     fork 2 cm to the right of the dinner plate"); what the examples disagree on is
-    reported, not learned. No LLM is asked. Use the file with `--preferences`.
+    reported, not learned. Then the LLM is asked where the same person would put the
+    catalog's other objects; its rules are checked by clingo against what the examples
+    show, which always wins (`--exact`: no LLM). Use the file with `--preferences`.
     """
     from rich.console import Console
     from rich.table import Table as RichTable
     from rich.text import Text
 
-    from llm_grop.arrangement.learning import learn as learn_examples
+    from llm_grop.api import learn as learn_examples
     from llm_grop.cli.console import print_warnings
     from llm_grop.files.jsonio import write_text
     from llm_grop.world.catalog import Catalog
@@ -52,8 +63,9 @@ def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
         raise BadInput(f"--out {out_path}: already exists; give --force to replace it")
     if out_path.resolve() in {e.resolve() for e in examples}:
         raise BadInput(f"--out {out_path}: is one of the examples")
+    settings = checked_settings(params, cache=cache_setting(params["cache"], no_cache))
     catalog = Catalog.load(catalog_files)
-    learned = learn_examples(examples, catalog)
+    learned = learn_examples(examples, settings, catalog=catalog, generalise=not exact)
     with StagedOutputs() as outputs:
         outputs.write("out", out_path, lambda p: write_text(p, learned.preference_file()))
         outputs.commit()
