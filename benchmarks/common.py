@@ -164,3 +164,26 @@ def start_server(db: Path, *flags: str) -> tuple[subprocess.Popen[bytes], str]:
             time.sleep(0.1)
     proc.kill()
     raise SystemExit("the server did not start")
+
+
+def write_settings(where: Path, request: str, sentences: Sequence[str], seeds: Sequence[int],
+                   catalog: Any) -> list[Path]:
+    """Example table settings of ``request`` set as the preference ``sentences`` say, one
+    per seed, as arrangement JSON files in ``where`` (no LLM is asked: the sentences place
+    every object)."""
+    import json
+
+    from llm_grop import arrange, arrangement_to_dict
+    from llm_grop.arrangement.options import ArrangeOptions
+
+    empty = where / "no_calls.jsonl"
+    empty.write_text("", encoding="utf-8")
+    out = []
+    for seed in seeds:
+        shown = arrange(request, seed=seed, catalog=catalog, llm="replay",
+                        llm_options=BackendOptions(replay_path=str(empty)),
+                        options=ArrangeOptions(preference_pool=tuple(sentences)))
+        path = where / f"example{seed}.json"
+        path.write_text(json.dumps(arrangement_to_dict(shown.arrangement)), encoding="utf-8")
+        out.append(path)
+    return out

@@ -4,7 +4,8 @@ Three settings of a left-handed diner (a dinner plate, fork, knife and mug, set 
 pipeline from the style's preferences with seeds 1-3, no LLM call) are written as
 arrangement JSON to a scratch directory; ``learn()`` then reads and learns from the three
 files ``--repeats`` times (files read each time, the catalog loaded once), and
-``llm-grop learn`` runs as a user runs it, Python's start included, ``--runs`` times.
+``llm-grop learn --exact`` (no LLM asked) runs as a user runs it, Python's start
+included, ``--runs`` times.
 Prints the median and 95th percentile of each, and what was learned.
 Run: .venv/bin/python benchmarks/learn_time.py [--repeats 200] [--runs 5] [--quick]
 """
@@ -12,18 +13,15 @@ Run: .venv/bin/python benchmarks/learn_time.py [--repeats 200] [--runs 5] [--qui
 from __future__ import annotations
 
 import argparse
-import json
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from common import median_p95, parse_args
+from common import median_p95, parse_args, write_settings
 
-from llm_grop import arrange, arrangement_to_dict, learn
-from llm_grop.arrangement.options import ArrangeOptions
-from llm_grop.llm.base import BackendOptions
+from llm_grop import learn
 from llm_grop.world.catalog import Catalog
 
 SETTING = "a dinner plate, a dinner fork, a dinner knife and a mug"
@@ -35,17 +33,7 @@ LEFT_HANDED = ("the dinner plate 4 cm from the diner's edge of the table",
 
 def examples(where: Path, catalog: Catalog) -> list[Path]:
     """Three settings in the left-handed style, as arrangement JSON files in ``where``."""
-    empty = where / "no_calls.jsonl"
-    empty.write_text("", encoding="utf-8")
-    out = []
-    for seed in (1, 2, 3):
-        shown = arrange(SETTING, seed=seed, catalog=catalog, llm="replay",
-                        llm_options=BackendOptions(replay_path=str(empty)),
-                        options=ArrangeOptions(preference_pool=LEFT_HANDED))
-        path = where / f"left{seed}.json"
-        path.write_text(json.dumps(arrangement_to_dict(shown.arrangement)), encoding="utf-8")
-        out.append(path)
-    return out
+    return write_settings(where, SETTING, LEFT_HANDED, (1, 2, 3), catalog)
 
 
 def main() -> None:
@@ -69,10 +57,10 @@ def main() -> None:
             out = Path(scratch) / f"prefs{k}.yaml"
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-m", "llm_grop", "learn", *map(str, files),
-                            "--out", str(out), "-q"], check=True)
+                            "--out", str(out), "--exact", "-q"], check=True)
             command.append(time.perf_counter() - t0)
         med, p95 = median_p95(command)
-        print(f"llm-grop learn with 3 examples, Python's start included, {args.runs} runs: "
+        print(f"llm-grop learn --exact with 3 examples, Python's start included, {args.runs} runs: "
               f"median {med:.2f} s, p95 {p95:.2f} s")
         for s in learned.sentences:
             print(f"  {s.sentence}")
