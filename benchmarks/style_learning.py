@@ -15,8 +15,14 @@ they do not (``unseen``). The LLM, for the rules and for Template 1 and its ques
   capable model would: the style's hand-written ``rules``, and the ``usual`` relations
   to Template 1; hand-written answers, not a model's output, labelled so;
 * ``embedded``: the embedded model (SmolLM2-135M), run live; needs it installed.
+Then the usual style (``data/preferences.yaml``) is learned exactly from 2 example
+settings (``usual_examples``: one of a plate and its cutlery, mug, lid and bread plate, one
+of a bowl, strawberry, mug on its mat, bread plate, bread and water cup), and LLM-GROP runs
+the paper's 8 tasks x ``--paper-seeds`` in 2D (1 chair) with it as ``--preferences``, and
+with the hand-written file, the stand-in answering Template 1 the usual way
+(``feedback_paper.py --llm stand-in``'s): the automatic rating per task, each way.
 Run: .venv/bin/python benchmarks/style_learning.py [--seeds 5] [--llm stand-in|embedded]
-     [--quick]
+     [--paper-seeds 20] [--quick]
 """
 
 from __future__ import annotations
@@ -29,11 +35,14 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from common import chat_server, parse_args, write_settings
+from common import chat_server, parse_args, span, write_settings
+from feedback_paper import DATA, said, stand_in_answer
+from hard_scenes import outcome
+from hard_scenes import stand_in as scene_stand_in
 
-from llm_grop import BackendOptions, arrange, learn
+from llm_grop import BackendOptions, arrange, learn, run
 from llm_grop.arrangement.examples import observed_gap_m, relation_between
-from llm_grop.arrangement.preferences import read_preferences
+from llm_grop.arrangement.preferences import load_preference_file, read_preferences
 from llm_grop.errors import LLMGropError
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.relation import STACKING
@@ -110,6 +119,27 @@ def score(style: Mapping[str, Any], prefs: Path, llm: dict[str, Any], seeds: int
     return got, asked, errors
 
 
+def paper_ratings(prefs: Path, seeds: int, tasks: Sequence[int], state: Any
+                  ) -> list[float | None]:
+    """The mean automatic rating per task of LLM-GROP with ``prefs`` as preferences, the
+    stand-in (``state``) answering Template 1 the usual way (``None``: nothing executed)."""
+    out = []
+    for task in tasks:
+        state.reply = scene_stand_in(said(stand_in_answer(task)))
+        ratings = []
+        for seed in range(seeds):
+            try:
+                r = run(task=task, seed=seed, chairs=1, method="llm-grop", llm="openai",
+                        llm_options=BackendOptions(base_url=state.url, api_key="stand-in",
+                                                   max_retries=0),
+                        preferences_file=str(prefs))
+            except LLMGropError:
+                continue
+            ratings.append(outcome(r).rating)
+        out.append(sum(ratings) / len(ratings) if ratings else None)
+    return out
+
+
 def _objects(request: str, catalog: Catalog) -> list[str]:
     return named(request.replace(" and ", ", and "), catalog)
 
@@ -122,7 +152,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--llm", default="stand-in", choices=("stand-in", "embedded"))
-    args = parse_args(ap, {"seeds": 1})
+    ap.add_argument("--paper-seeds", type=int, default=20)
+    ap.add_argument("--tasks", default="1-8", help="the paper's tasks to rate (1-8)")
+    args = parse_args(ap, {"seeds": 1, "paper_seeds": 1, "tasks": "1"})
     data = yaml.safe_load(STYLES.read_text(encoding="utf-8"))
     catalog = Catalog.load(use_env=False)
     state, httpd = chat_server()
@@ -158,6 +190,27 @@ def main() -> None:
                              else ""))
                     for e in sorted(set(errors))[:2]:
                         print(f"    {e[:160]}")
+            where = Path(scratch) / "usual"
+            where.mkdir()
+            hand = DATA / "preferences.yaml"
+            pool = load_preference_file(hand)
+            files = []
+            for k, request in enumerate(data["usual_examples"]):
+                (where / str(k)).mkdir()
+                files += write_settings(where / str(k), request, pool, (1,), catalog)
+            learned = learn(files, catalog=catalog)
+            prefs = where / "learned.yaml"
+            prefs.write_text(learned.preference_file(), encoding="utf-8")
+            tasks = span(args.tasks)
+            print(f"the usual style learned from {len(files)} example settings "
+                  f"({len(learned.sentences)} sentences, exact); LLM-GROP, the paper's tasks "
+                  f"x {args.paper_seeds} seeds, 2D, 1 chair, the stand-in answering "
+                  "Template 1 the usual way; automatic rating per task:")
+            for label, path in (("hand-written preferences.yaml", hand), ("learned", prefs)):
+                got = paper_ratings(path, args.paper_seeds, tasks, state)
+                print(f"  {label}: " + ", ".join(
+                    f"{t}: {'-' if g is None else f'{g:.2f}'}"
+                    for t, g in zip(tasks, got, strict=True)))
     finally:
         httpd.shutdown()
 
