@@ -100,6 +100,8 @@ STEPS: tuple[Step, ...] = (
        "python benchmarks/family_planning.py", note="about 1.5 minutes"),
     _t("learn-time", ("**Learning from 3 examples**",),
        "python benchmarks/learn_time.py", note="a few seconds"),
+    _d("style-learning", ("**The style benchmark**",),
+       "python benchmarks/style_learning.py", note="about 3 minutes"),
     _d("hard-scenes", ("**The hard-scene suite**",),
        "python benchmarks/hard_scenes.py --seeds 10", note="the stand-in's rows"),
     _d("hard-scenes-embedded", ("**The hard-scene suite**",),
