@@ -101,7 +101,11 @@ STEPS: tuple[Step, ...] = (
     _t("learn-time", ("**Learning from 3 examples**",),
        "python benchmarks/learn_time.py", note="a few seconds"),
     _d("style-learning", ("**The style benchmark**",),
-       "python benchmarks/style_learning.py", note="about 3 minutes"),
+       "python benchmarks/style_learning.py", note="the stand-in's rows and the paper's "
+       "tasks (about 3 minutes)"),
+    _d("style-learning-embedded", ("**The style benchmark**",),
+       "python benchmarks/style_learning.py --llm embedded --paper-seeds 1 --tasks 1",
+       note="the embedded model's rows, run live (about 15 minutes)"),
     _d("hard-scenes", ("**The hard-scene suite**",),
        "python benchmarks/hard_scenes.py --seeds 10", note="the stand-in's rows"),
     _d("hard-scenes-embedded", ("**The hard-scene suite**",),
