@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from os import PathLike
@@ -41,7 +40,7 @@ from llm_grop.methods.registry import available_methods, get_method
 from llm_grop.settings import DEFAULTS, RunSettings
 from llm_grop.simulation.registry import available_simulators
 from llm_grop.world.arrangement import Arrangement, Item
-from llm_grop.world.catalog import Catalog
+from llm_grop.world.catalog import Catalog, instance_kind
 from llm_grop.world.request import Request, items_from_names
 from llm_grop.world.scene import Scene
 from llm_grop.world.table import Table
@@ -268,7 +267,7 @@ def _plan(request: str | None, job: RunInputs, catalog: Catalog | None,
     base = seat_scene_diners(base, s)
     base = with_robot_settings(base, s)
     for k, source in enumerate(base.sources):
-        kind = _NUMBERED.sub("", source.object)
+        kind = instance_kind(source.object)
         if catalog.lookup(kind) is None:
             where = f"{s.scene}: " if s.scene is not None and job.scene is None else ""
             raise BadInput(f"{where}sources[{k}] ({source.object!r}).object: unknown object; "
@@ -329,16 +328,12 @@ def execute(planned: PlanResult, settings: RunSettings | None = None, *,
             episode.close()
 
 
-#: A trailing instance number: "dinner fork 2" is of kind "dinner fork".
-_NUMBERED = re.compile(r"\s+\d+$")
-
-
 def _given_items(arrangement: Arrangement, catalog: Catalog) -> tuple[Item, ...]:
     """The items of a given arrangement, each of its placement's catalog kind."""
     origins = {name: (source, words) for name, source, words in arrangement.origins}
     items = []
     for k, p in enumerate(arrangement.placements):
-        kind = p.kind if p.kind and p.kind != p.name else _NUMBERED.sub("", p.name)
+        kind = p.kind if p.kind and p.kind != p.name else instance_kind(p.name)
         spec = catalog.resolve(kind, f"arrangement: objects[{k}].kind")
         source, words = origins.get(p.name, ("request", ""))
         items.append(Item(p.name, spec, p.diner, source, words))

@@ -26,17 +26,14 @@ from llm_grop.errors import BadInput
 @click.option("--force", is_flag=True,
               help="Replace the --out file if it exists (a preferences file may be "
                    "written by hand, so it is never replaced unasked).")
-@click.option("--catalog", "catalog_files", multiple=True,
-              type=click.Path(dir_okay=False, path_type=Path),
-              help="An extra object catalog file (repeatable).")
 @click.option("--exact", is_flag=True,
               help="Learn only what the examples show: ask no LLM for rules about the "
                    "catalog's other objects.")
-@flags(*LLM_FIELDS, "seed", "cache", help={"seed": "Seed of the LLM's call."})
+@flags("catalog_files", *LLM_FIELDS, "seed", "cache", help={"seed": "Seed of the LLM's call."})
 @NO_CACHE
 @QUIET
 def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
-          catalog_files: tuple[Path, ...], exact: bool, quiet: bool, no_cache: bool,
+          exact: bool, quiet: bool, no_cache: bool,
           **params: Any) -> None:
     """Learn how a person sets the table from EXAMPLE settings, as preference sentences.
 
@@ -55,7 +52,6 @@ def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
     from llm_grop.api import learn as learn_examples
     from llm_grop.cli.console import print_warnings
     from llm_grop.files.jsonio import write_text
-    from llm_grop.world.catalog import Catalog
 
     # The output is checked before any example is read.
     check_outputs(out=out_path)
@@ -64,8 +60,7 @@ def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
     if out_path.resolve() in {e.resolve() for e in examples}:
         raise BadInput(f"--out {out_path}: is one of the examples")
     settings = checked_settings(params, cache=cache_setting(params["cache"], no_cache))
-    catalog = Catalog.load(catalog_files)
-    learned = learn_examples(examples, settings, catalog=catalog, generalise=not exact)
+    learned = learn_examples(examples, settings, generalise=not exact)
     with StagedOutputs() as outputs:
         outputs.write("out", out_path, lambda p: write_text(p, learned.preference_file()))
         outputs.commit()
