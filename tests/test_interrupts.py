@@ -61,6 +61,21 @@ def test_an_interrupt_inside_an_extensions_start_counts_as_an_interrupt() -> Non
     assert interrupted(KeyboardInterrupt())
 
 
+def test_a_failure_after_an_interrupt_is_reported_as_the_interrupt(tmp_path: Path,
+                                                                   capsys) -> None:
+    # Raised inside shapely while an affine matrix was being built, an interrupt once came
+    # out as "ValueError: Invalid affine transformation matrix", with no KeyboardInterrupt
+    # in its chain: the console script says a signal arrived, and that is what is told.
+    from llm_grop.cli import main
+
+    missing = str(tmp_path / "missing.json")
+    out = str(tmp_path / "p.yaml")
+    assert main(["learn", missing, "--exact", "--out", out], signalled=lambda: True) == 130
+    assert capsys.readouterr().err == "llm-grop: interrupted\n"
+    assert main(["learn", missing, "--exact", "--out", out], signalled=lambda: False) == 2
+    assert "missing.json" in capsys.readouterr().err
+
+
 # -- SIGTERM under every executor: 143, one line, no native stack dump, rows kept ----------
 
 #: A line an interrupted bench prints: the command's own, or the entry point's before it.

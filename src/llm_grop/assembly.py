@@ -14,7 +14,7 @@ What the settings record holds always comes from the record.
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from dataclasses import fields as dataclass_fields
 from os import PathLike
@@ -135,14 +135,23 @@ def arrange_options(s: RunSettings, base: ArrangeOptions | None = None,
 
 def _learned(s: RunSettings, catalog: Catalog | None) -> dict[str, Any]:
     """The learned sentences and warnings of the record's example settings, by field."""
-    from llm_grop.arrangement.learning import learn
-
     if not s.examples:
         return {}
-    learning = learn(list(s.examples), catalog or Catalog.load(s.catalog_files))
+    return learned_options(list(s.examples), catalog or Catalog.load(s.catalog_files),
+                           "--examples")
+
+
+def learned_options(examples: Sequence[str | PathLike[str] | Mapping[str, Any]],
+                    catalog: Catalog, given_as: str) -> dict[str, Any]:
+    """The :class:`ArrangeOptions` fields (``learned``, ``learned_warnings``) of the
+    sentences learned exactly from ``examples`` (files or parsed documents), each warning
+    and disagreement prefixed with ``given_as`` (how the user gave them)."""
+    from llm_grop.arrangement.learning import learn
+
+    learning = learn(examples, catalog)
     return {"learned": tuple((x.sentence, x.sources) for x in learning.sentences),
-            "learned_warnings": tuple(f"--examples: {w}" for w in learning.warnings)
-            + tuple(f"--examples: {c.message()}" for c in learning.contradictions)}
+            "learned_warnings": tuple(f"{given_as}: {w}" for w in learning.warnings)
+            + tuple(f"{given_as}: {c.message()}" for c in learning.contradictions)}
 
 
 def sampling(s: RunSettings) -> SamplingParams:

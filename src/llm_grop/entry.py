@@ -37,8 +37,7 @@ def main() -> int:
             # where the command can take it.
             threading.Timer(0.02, os.kill, (os.getpid(), signum)).start()
             return
-        if signum == signal.SIGTERM:
-            received.append(signum)
+        received.append(signum)
         if loading and not deferred:
             # Raised inside an extension module's start (numpy's, under shapely's), the
             # interrupt is printed there as a traceback and comes out as an ImportError
@@ -55,7 +54,7 @@ def main() -> int:
         loading = False
         if deferred:
             raise KeyboardInterrupt
-        code = cli_main()
+        code = cli_main(signalled=lambda: bool(received))
     except (KeyboardInterrupt, ImportError) as exc:  # before the command line could take it
         if not interrupted(exc):
             raise
@@ -65,7 +64,7 @@ def main() -> int:
         # The command has ended: a late signal must not turn its result into a traceback.
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    code = TERMINATED if code == INTERRUPTED and received else code
+    code = TERMINATED if code == INTERRUPTED and signal.SIGTERM in received else code
     if code in (INTERRUPTED, TERMINATED):
         _exit(code)
     return code

@@ -4,7 +4,10 @@ vocabulary and kept only where the examples say nothing."""
 
 from __future__ import annotations
 
+import statistics
 from pathlib import Path
+
+import pytest
 
 from learning_support import CATALOG, LEFT_HANDED, write_example
 from llm_grop import BackendOptions, arrange, learn
@@ -33,10 +36,15 @@ def test_rules_place_only_what_the_examples_do_not_show(chat_server, tmp_path: P
                                                         ) -> None:
     learned = _learn(chat_server, tmp_path)
     rules = [s for s in learned.sentences if s.sources[0].startswith("a rule by")]
+    # Each rule takes the style's spacing: the median of the exact sentences' gaps.
+    spacing = statistics.median(s.gap_cm for s in learned.sentences
+                                if s.reference is not None and s not in rules)
+    assert 2 <= spacing <= 3
     assert [s.sentence for s in rules] == [
-        "the salad fork to the right of the dinner fork",
-        "the water cup above and to the left of the dinner plate"]
-    assert all(s.gap_cm is None and s.sources == ("a rule by gpt-4o-mini",) for s in rules)
+        f"the salad fork {spacing:g} cm to the right of the dinner fork",
+        f"the water cup {spacing:g} cm above and to the left of the dinner plate"]
+    assert all(s.gap_cm == spacing and s.spread_cm is None
+               and s.sources == ("a rule by gpt-4o-mini",) for s in rules)
     # The examples' own sentences are untouched: the fork stays on the right.
     assert any(s.sentence.startswith("the dinner fork ") and "to the right of" in s.sentence
                for s in learned.sentences)
@@ -66,6 +74,8 @@ def test_a_rule_sets_an_object_the_examples_never_showed(chat_server, tmp_path: 
     got = {r.key(): r for r in result.arrangement.relations}
     cup = got[("water cup", "above and to the left of", "dinner plate")]
     assert cup.source == "preference"
+    rule = next(s for s in learned.sentences if s.subject == "water cup")
+    assert rule.gap_cm is not None and cup.gap_m == pytest.approx(rule.gap_cm / 100)
     assert ("dinner fork", "to the right of", "dinner plate") in got
 
 

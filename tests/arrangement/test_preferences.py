@@ -8,7 +8,7 @@ import pytest
 
 from llm_grop import BackendOptions, arrange
 from llm_grop.arrangement.pipeline import ArrangeOptions
-from llm_grop.arrangement.preferences import read_edge_preferences
+from llm_grop.arrangement.preferences import covers, read_edge_preferences, read_preferences
 from llm_grop.arrangement.sampling import violations
 from llm_grop.cli import main
 from llm_grop.errors import BadInput
@@ -59,6 +59,41 @@ def test_preferences_for_every_object_skip_template_1(chat_server) -> None:
     assert prompts and all("centimeters" in p for p in prompts)  # Template 2 only
     pos = {p.name: p.x for p in result.arrangement.placements}
     assert pos["dinner fork"] < pos["dinner plate"] < pos["dinner knife"]
+
+
+def test_preferences_in_two_groups_still_ask_template_1(chat_server) -> None:
+    # Every object is named, but nothing says where the mug and its lid go from the plate.
+    chat_server.reply = scripted([
+        "dinner fork to the left of dinner plate\nmug above and to the right of dinner plate\n"
+        "mug lid on top of mug"])
+    pool = ("the dinner fork to the left of the dinner plate", "the mug lid on top of the mug")
+    result = _arrange(chat_server, ArrangeOptions(preference_pool=pool),
+                      request="a dinner plate, a dinner fork, a mug and a mug lid")
+    assert ("mug", "above and to the right of", "dinner plate") in _rels(result)
+    prompts = [c.prompt for c in result.arrangement.llm.calls]
+    assert not all("centimeters" in p for p in prompts)  # Template 1 was asked
+
+
+def test_covers_asks_for_one_connected_group() -> None:
+    items = tuple(items_from_names(["dinner plate", "dinner fork", "mug", "mug lid"], CATALOG))
+    read = read_preferences(["the dinner fork to the left of the dinner plate",
+                             "the mug lid on top of the mug"], [], items, CATALOG)
+    assert not covers(read.relations, items)
+    more = read_preferences(["the mug to the right of the dinner fork"], [], items, CATALOG)
+    assert covers((*read.relations, *more.relations), items)
+    assert not covers((), items)
+
+
+@pytest.mark.parametrize(("sentence", "gap_m"), [
+    ("the dinner fork 2 to the left of the dinner plate", None),
+    ("the dinner fork 2 3 cm to the left of the dinner plate", 0.03),
+    ("the dinner fork 2 to the left of the dinner plate, 4 cm apart", 0.04),
+])
+def test_a_numbered_objects_number_is_no_distance(sentence: str, gap_m: float | None
+                                                  ) -> None:
+    items = tuple(items_from_names(["dinner plate", "dinner fork", "dinner fork"], CATALOG))
+    (read,) = read_preferences([sentence], [], items, CATALOG).relations
+    assert (read.subject, read.gap_m) == ("dinner fork 2", gap_m)
 
 
 def test_contradicting_preferences_are_bad_input(chat_server) -> None:

@@ -363,6 +363,26 @@ def test_preferences_learned_from_example_settings(server: Server) -> None:
     assert data["file"].startswith("# Preferences learned") and data["not_learned"] == []
 
 
+def test_arrangements_and_plans_take_example_settings(server: Server) -> None:
+    """A body's ``examples`` apply as ``--examples`` does: the left-handed fork goes right
+    of the plate, with source ``learned`` and the settings it was read off."""
+    from learning_support import LEFT_HANDED, arranged
+
+    examples = [arranged(LEFT_HANDED, seed) for seed in (1, 2)]
+    with server.client() as c:
+        arranged_answer = c.post("/v1/arrangements", json={"request": REQUEST, "seed": 0,
+                                                           "examples": examples})
+        planned = c.post("/v1/plans", json={"task": 1, "seed": 0, "examples": examples})
+        bad = c.post("/v1/arrangements", json={"request": REQUEST, "examples": [{}]})
+    for answer, doc in ((arranged_answer, "arrangement"), (planned, "plan")):
+        assert answer.status_code == 200, answer.text
+        relations = answer.json()["reading"]["relations"]
+        (fork,) = [r for r in relations if r["subject"] == "dinner fork"]
+        assert (fork["relation"], fork["reference"], fork["source"], fork["examples"]) == (
+            "to the right of", "dinner plate", "learned", ["example 1", "example 2"]), doc
+    assert bad.status_code == 422 and bad.json()["error"].startswith("example 1: ")
+
+
 @pytest.mark.parametrize(("body", "needle"), [
     ({"examples": []}, "examples: must not be empty"),
     ({"examples": [{}]}, "example 1: "),

@@ -77,6 +77,7 @@ from llm_grop.arrangement.geometry import choose_origin
 from llm_grop.arrangement.predicates import Footprint, stacked_pairs
 from llm_grop.arrangement.preferences import read_edge_preferences, read_preferences
 from llm_grop.errors import BadInput
+from llm_grop.world.arrangement import Item
 from llm_grop.world.catalog import Catalog
 from llm_grop.world.relation import CONVERSE, ON_TOP_OF, UNDER
 
@@ -315,7 +316,7 @@ def _edges(observations: Sequence[Observation], catalog: Catalog,
     out = []
     for main, gaps in seen.items():
         cm = [100 * g for _, g, _ in gaps]
-        median = _cm(max(statistics.median(cm), 0.0))
+        median = round_cm(max(statistics.median(cm), 0.0))
         sentence = f"the {main} {median:g} cm from the diner's edge of the table"
         first = gaps[0][2]
         try:
@@ -326,7 +327,8 @@ def _edges(observations: Sequence[Observation], catalog: Catalog,
             warnings.append(f"cannot phrase {sentence!r} so that the preference reader "
                             "reads it back; not learned")
             continue
-        out.append(Learned(sentence, main, None, None, median, (_cm(min(cm)), _cm(max(cm))),
+        out.append(Learned(sentence, main, None, None, median,
+                           (round_cm(min(cm)), round_cm(max(cm))),
                            tuple(source for source, _, _ in gaps)))
     return out
 
@@ -341,31 +343,43 @@ def _relation_sentence(subject: str, reference: str, seen: Sequence[_Reading],
         subject, reference, relation = reference, subject, CONVERSE[UNDER]
     sources = tuple(r.source for r in seen)
     first = next(o for o in observations if o.source == sources[0])
-    if relation == ON_TOP_OF:
-        phrasings = [f"the {subject} {relation} the {reference}"]
-        gap_cm, spread = None, None
-    else:
+    gap_cm, spread = None, None
+    if relation != ON_TOP_OF:
         cm = [100 * r.gap_m for r in seen if r.gap_m is not None]
-        gap_cm = _cm(max(statistics.median(cm), 0.0))
-        spread = (_cm(min(cm)), _cm(max(cm)))
+        gap_cm = round_cm(max(statistics.median(cm), 0.0))
+        spread = (round_cm(min(cm)), round_cm(max(cm)))
+    sentence = phrase(subject, relation, reference, gap_cm, first.items, catalog)
+    return None if sentence is None else \
+        Learned(sentence, subject, relation, reference, gap_cm, spread, sources)
+
+
+def phrase(subject: str, relation: str, reference: str, gap_cm: float | None,
+           items: Sequence[Item], catalog: Catalog) -> str | None:
+    """The preference sentence of ``subject relation reference`` with ``gap_cm``
+    (centimetres; ``None``: no distance) that the preference reader reads back exactly
+    over ``items``; ``None`` when no phrasing does."""
+    if gap_cm is None:
+        phrasings = [f"the {subject} {relation} the {reference}"]
+    else:
         # The paper's phrasing; the other where a number after the subject's name would
         # read as part of a name ("the dinner fork 2 cm ..." beside a "dinner fork 2").
         phrasings = [f"the {subject} {gap_cm:g} cm {relation} the {reference}",
                      f"the {subject} {relation} the {reference}, {gap_cm:g} cm apart"]
     for sentence in phrasings:
         try:
-            read = read_preferences([sentence], [], first.items, catalog).relations
+            read = read_preferences([sentence], [], items, catalog).relations
         except BadInput:
             continue
         got = [(r.subject, r.relation, r.reference) for r in read]
         if got == [(subject, relation, reference)] and (gap_cm is None or (
                 read[0].gap_m is not None and math.isclose(read[0].gap_m, gap_cm / 100))):
-            return Learned(sentence, subject, relation, reference, gap_cm, spread, sources)
+            return sentence
     return None
 
 
-def _cm(value_cm: float) -> float:
-    """``value_cm`` rounded to a millimetre, as sentences and comments say it."""
+def round_cm(value_cm: float) -> float:
+    """``value_cm`` (centimetres) rounded to a millimetre, as sentences and comments say
+    it."""
     return round(value_cm, 1) + 0.0
 
 

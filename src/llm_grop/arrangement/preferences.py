@@ -4,10 +4,10 @@ LLM or from the user).
 Preferences are sentences in the paper's own phrasing ("the dinner fork to the left of
 the dinner plate", "mug lid on top of mug"), read by the same reader as the LLM's answers.
 They win over the LLM: an LLM relation about a pair the user spoke of is dropped, and so
-is one that clingo finds inconsistent with the preferences. When the preferences mention
-every requested object, Template 1 is not asked at all. A preference that states a
-distance ("the dinner fork 2 cm to the left of the dinner plate") sets that gap, and
-Template 2 is asked only for the others.
+is one that clingo finds inconsistent with the preferences. When the preferences relate
+every requested object to the others (:func:`covers`), Template 1 is not asked at all. A
+preference that states a distance ("the dinner fork 2 cm to the left of the dinner
+plate") sets that gap, and Template 2 is asked only for the others.
 
 A preference may also say how far an object goes from the diner's edge of the table
 ("the dinner plate 3 cm from the diner's edge"): that object becomes the origin of the
@@ -130,9 +130,13 @@ def _with_gap(relation: Relation, sentence: str, param: str | None,
               learned_from: Sequence[str] = ()) -> Relation:
     """``relation`` as a preference, with the distance ``sentence`` states, if any; as a
     learned one when it was read off the example settings ``learned_from``."""
-    if _NEGATIVE.search(sentence):
+    # A numbered object's number ("the dinner fork 2") is part of its name, not a distance.
+    said = sentence
+    for name in sorted({relation.subject, relation.reference} - {None}, key=len, reverse=True):
+        said = re.sub(rf"(?<![\w.]){re.escape(name)}(?![\w.])", " ", said, flags=re.I)
+    if _NEGATIVE.search(said):
         raise _refused(param, sentence, "a distance must not be negative")
-    cm = parse_distance_cm(sentence)
+    cm = parse_distance_cm(said)
     return replace(relation, source="learned" if learned_from else "preference",
                    gap_m=None if cm is None else cm / 100, learned_from=tuple(learned_from))
 
@@ -219,9 +223,24 @@ def contradiction(conflict: Sequence[Relation | Choice]) -> str:
 
 
 def covers(preferences: Sequence[Relation], items: Sequence[Item]) -> bool:
-    """Whether every requested object is mentioned by some preference."""
-    named = {r.subject for r in preferences} | {r.reference for r in preferences}
-    return bool(preferences) and all(i.name in named for i in items)
+    """Whether the preferences relate every requested object to every other, through one
+    another: the ``items`` are one connected group when each relation joins its two
+    objects. Mentioning each object is not enough: "the mug lid on top of the mug" beside
+    "the dinner fork to the left of the dinner plate" says nothing of where the mug goes
+    from the plate, so Template 1 must still be asked for that."""
+    names = {i.name for i in items}
+    if not preferences or not names:
+        return False
+    group = {next(iter(names))}
+    grew = True
+    while grew:
+        grew = False
+        for r in preferences:
+            ends = {r.subject, r.reference}
+            if ends & group and not ends <= group:
+                group |= ends
+                grew = True
+    return names <= group
 
 
 def merge(preferences: Sequence[Relation], llm: Sequence[Relation]

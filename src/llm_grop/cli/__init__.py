@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Callable
 
 import click
 
@@ -46,8 +47,14 @@ cli.add_command(doctor)
 cli.add_command(view)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point: runs the command, printing one line and no traceback on failure."""
+def main(argv: list[str] | None = None, signalled: Callable[[], bool] | None = None) -> int:
+    """Entry point: runs the command, printing one line and no traceback on failure.
+
+    ``signalled`` says whether an interrupt (Ctrl-C, SIGTERM) has arrived: the console
+    script's handler (:mod:`llm_grop.entry`) knows. A failure after one is reported as the
+    interrupt, because an interrupt raised inside an extension (shapely's, numpy's) can
+    surface as an error of its own with no ``KeyboardInterrupt`` in its chain.
+    """
     try:
         code = cli.main(args=argv, prog_name="llm-grop", standalone_mode=False)
     except click.exceptions.Abort:
@@ -56,28 +63,32 @@ def main(argv: list[str] | None = None) -> int:
     except click.exceptions.NoArgsIsHelpError as exc:
         click.echo(exc.format_message())
         return 0
-    except click.ClickException as exc:
+    except Exception as exc:  # noqa: BLE001 - the contract promises no traceback
+        if interrupted(exc) or (signalled is not None and signalled()):
+            click.echo("llm-grop: interrupted", err=True)
+            return 130
+        return _failed(exc)
+    return code if isinstance(code, int) else 0
+
+
+def _failed(exc: Exception) -> int:
+    """Print the one line for the failure ``exc``; its exit status."""
+    if isinstance(exc, click.ClickException):
         ctx = getattr(exc, "ctx", None)
         where = f"{ctx.command_path}: " if ctx is not None else ""
         click.echo(f"llm-grop: error: {where}{exc.format_message()}", err=True)
         return 2
-    except LLMGropError as exc:
+    if isinstance(exc, LLMGropError):
         click.echo(f"llm-grop: error: {reworded(exc)}", err=True)
         return exc.exit_code
-    except OSError as exc:
+    if isinstance(exc, OSError):
         click.echo(f"llm-grop: error: {exc.filename or ''}: {exc.strerror or exc}", err=True)
         return 2
-    except Exception as exc:  # noqa: BLE001 - the contract promises no traceback
-        if interrupted(exc):
-            click.echo("llm-grop: interrupted", err=True)
-            return 130
-        if os.environ.get("LLM_GROP_DEBUG"):
-            raise
-        click.echo(f"llm-grop: internal error: {type(exc).__name__}: {exc} "
-                   "(set LLM_GROP_DEBUG=1 for a traceback)", err=True)
-        return INTERNAL_ERROR_EXIT
-    return code if isinstance(code, int) else 0
-
+    if os.environ.get("LLM_GROP_DEBUG"):
+        raise exc
+    click.echo(f"llm-grop: internal error: {type(exc).__name__}: {exc} "
+               "(set LLM_GROP_DEBUG=1 for a traceback)", err=True)
+    return INTERNAL_ERROR_EXIT
 
 if __name__ == "__main__":
     sys.exit(main())

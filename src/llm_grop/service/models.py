@@ -92,6 +92,10 @@ class ArrangeBody(_Body):
     preferences: list[Sentence] = Field([], max_length=20, description="relations the user "
                                         "wants, e.g. 'the dinner fork to the left of the "
                                         "dinner plate'; they win over the LLM")
+    examples: list[dict[str, Any]] = Field(
+        [], max_length=20, description="example table settings to learn preferences from, as "
+        "POST /v1/preferences does (each the contract's arrangement JSON, or a run JSON); "
+        "what holds in every example applies as `preferences` do, with source `learned`")
     llm: Name | None = Field(None, description="one of the server's backends (GET /v1/info); "
                                                "default: its first")
     seed: setting("seed", StrictInt) = described("seed")
@@ -121,6 +125,10 @@ class PlanBody(_Body):
     table: TableBody | None = Field(None, description="replaces the scene's target top")
     diners: setting("diners", StrictInt) | None = described("diners")
     preferences: list[Sentence] = Field([], max_length=20)
+    examples: list[dict[str, Any]] = Field(
+        [], max_length=20, description="example table settings to learn preferences from, as "
+        "POST /v1/preferences does (each the contract's arrangement JSON, or a run JSON); "
+        "what holds in every example applies as `preferences` do, with source `learned`")
     scene: dict[str, Any] | None = Field(
         None, description="the room as a scene document (the run JSON's scene; default: the "
                           "packaged dining room)")

@@ -65,9 +65,10 @@ def perform(kind: str, body: dict[str, Any], config: ServiceConfig, llms: Backen
 
 
 #: Body fields named as a setting that are no value of it: the server's backend by its
-#: name, the table as an object, the scene as a document and the sensed chairs (the
-#: record's ``scene`` is a file and its ``chairs`` a number to sample).
-_APART = ("llm", "table", "scene", "chairs")
+#: name, the table as an object, the scene and the example settings as documents and the
+#: sensed chairs (the record's ``scene`` and ``examples`` are files and its ``chairs`` a
+#: number to sample).
+_APART = ("llm", "table", "scene", "chairs", "examples")
 
 
 def _settings(body: ArrangeBody | PlanBody) -> RunSettings:
@@ -75,6 +76,19 @@ def _settings(body: ArrangeBody | PlanBody) -> RunSettings:
     them as the record does; the LLM is the server's, chosen apart)."""
     return RunSettings.make({name: getattr(body, name) for name in type(body).model_fields
                              if name in RunSettings.model_fields and name not in _APART})
+
+
+def _learned(body: ArrangeBody | PlanBody) -> dict[str, Any]:
+    """The keyword giving the arrangement the preferences learned from the body's example
+    settings, with the server's catalog (none: no keyword)."""
+    from llm_grop.arrangement.options import ArrangeOptions
+    from llm_grop.assembly import learned_options
+    from llm_grop.world.catalog import Catalog
+
+    if not body.examples:
+        return {}
+    return {"options": ArrangeOptions(**learned_options(body.examples, Catalog.load(),
+                                                        "examples"))}
 
 
 def check_plugin_options(body: ArrangeBody | PlanBody) -> None:
@@ -126,7 +140,7 @@ def _arrange(body: ArrangeBody, config: ServiceConfig, llms: Backends,
     from llm_grop.contract.serialize import arrangement_to_dict
 
     result = arrange(body.request, _settings(body), llm=llms.log(body.llm),
-                     table=_table(body), on_event=on_event)
+                     table=_table(body), on_event=on_event, **_learned(body))
     _check_size(len(result.arrangement.placements), config)
     return ({"arrangement": arrangement_to_dict(result.arrangement)},
             _table_pictures(result.arrangement, config.scratch))
@@ -177,7 +191,7 @@ def _planned(body: PlanBody, config: ServiceConfig, llms: Backends,
     settings = _settings(body)
     planned = plan(body.request, settings, arrangement=arrangement, scene=_scene(body),
                    table=body.table.table() if body.table is not None else None,
-                   llm=llms.log(body.llm), on_event=on_event, check=check)
+                   llm=llms.log(body.llm), on_event=on_event, check=check, **_learned(body))
     _check_size(len(planned.input.items), config)
     return planned
 
