@@ -30,11 +30,8 @@ class PlannerReach:
         for j, placement in enumerate(ordered):
             if p[j].max() > 0:
                 continue
-            (x, y), = self.ctx.targets_room([placement])
-            reachable = self.ctx.cand_nav_p > 0
-            nearest = min((math.hypot(cx - x, cy - y)
-                           for (cx, cy), ok in zip(self.ctx.cand_xy, reachable, strict=True)
-                           if ok), default=math.inf)
+            (xy,) = self.ctx.targets_room([placement])
+            nearest = self.ctx.nearest_stand_m(xy)
             reach_m = self.ctx.scene.robot.reach_max_m
             far = f"the nearest is {nearest:.2f} m from it" if math.isfinite(nearest) \
                 else "there is none"

@@ -19,6 +19,7 @@ success probability (the authors used ``w = 40``) minus the expected duration.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -203,11 +204,21 @@ class PlanningContext:
         targets = self.targets_room(placements)
         for j, p in enumerate(placements):
             if feas[j].max() <= 0:
-                nearest = float(np.min(np.hypot(*(self.cand_xy - targets[j]).T)))
+                nearest = self.nearest_stand_m(targets[j])
+                far = f"the nearest the robot can drive to is {nearest:.2f} m away" \
+                    if math.isfinite(nearest) else "the robot can drive to none"
                 return (f"no standing position can reach {p.name!r} at table-frame "
-                        f"({p.x:+.2f}, {p.y:+.2f}) m: the nearest free one is {nearest:.2f} m "
-                        f"away and the arm reaches {robot.reach_max_m:.2f} m")
+                        f"({p.x:+.2f}, {p.y:+.2f}) m: {far} and the arm reaches "
+                        f"{robot.reach_max_m:.2f} m")
         return None
+
+    def nearest_stand_m(self, xy: Sequence[float]) -> float:
+        """The distance, metres, from the room-frame point ``xy`` to the nearest standing
+        position the robot can drive to (``inf``: none)."""
+        drivable = self.cand_xy[self.cand_nav_p > 0]
+        if not len(drivable):
+            return math.inf
+        return float(np.min(np.hypot(*(drivable - np.asarray(xy)).T)))
 
 
 def _dist(stand: StandingPose, source: ObjectSource) -> float:
