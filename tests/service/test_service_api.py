@@ -10,6 +10,7 @@ from pathlib import Path
 import httpx
 import jsonschema
 import pytest
+import yaml
 
 from service_support import Server, start_server, wait_done
 
@@ -78,6 +79,25 @@ def test_a_plan_a_robot_stack_executes(server: Server) -> None:
     places = [s for s in steps if s["action"] == "place"]
     assert [s["object"] for s in places] == body["plan"]["plan"]["order"]
     assert all(len(s["standing"]) == 3 and len(s["pose"]) == 3 for s in places)
+
+
+def test_a_plan_carries_several_objects_per_trip(server: Server) -> None:
+    # With the supplies in a kitchen next door, a trip of several objects pays.
+    scene = yaml.safe_load((Path(__file__).parents[2] / "benchmarks" / "data"
+                            / "kitchen_apart.yaml").read_text(encoding="utf-8"))
+    with server.client() as c:
+        plans = {capacity: c.post("/v1/plans", json={
+            "task": 1, "seed": 3, "method": "grop", "scene": scene, "capacity": capacity})
+            for capacity in (1, 3)}
+        bad = c.post("/v1/plans", json={"task": 8, "capacity": 0})
+    actions = {}
+    for capacity, r in plans.items():
+        assert r.status_code == 200, r.text
+        actions[capacity] = [s["action"] for s in r.json()["plan"]["steps"] if
+                             s["action"] != "navigate"]
+    assert actions[1] == ["pick", "place"] * 3
+    assert actions[3] == ["pick"] * 3 + ["place"] * 3
+    assert bad.status_code == 422 and bad.json()["error"].startswith("capacity: ")
 
 
 def test_a_run_as_a_job_with_its_events(server: Server) -> None:

@@ -138,6 +138,7 @@ class PlanBody(_Body):
                                          "sampled for the seed)")
     robot: tuple[Coordinate, Coordinate, Annotated[float, Field(allow_inf_nan=False)]] | None \
         = Field(None, description="the robot's pose [x, y, theta] in the room frame")
+    capacity: setting("capacity", StrictInt) | None = described("capacity")
     method: Name = described("method")
     method_options: PluginOptions = plugin_options("method")
     feasibility: Name = described("feasibility")
