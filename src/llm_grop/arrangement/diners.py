@@ -35,6 +35,9 @@ Ask = Callable[[Sequence[Item], Table], Setting]
 #: ``sample(items, setting, box, rng_factory, region)``: one diner's sampled setting.
 Sample = Callable[[Sequence[Item], Setting, Table, Callable[[], np.random.Generator],
                    Polygon | None], Sampled]
+#: ``reach(configurations)``: the failure when every joined configuration (table frame)
+#: puts an object out of the robot's reach, else ``None``.
+Reach = Callable[[Sequence[Configuration]], NoArrangement | None]
 #: ``revise(items, setting, box, failure)``: a revision of a setting no configuration in
 #: ``box`` keeps (the feedback loop's), or ``None``.
 Revise = Callable[[Sequence[Item], Setting, Table, NoArrangement], Setting | None]
@@ -146,49 +149,75 @@ def _joined(fidelity: Sequence[Fidelity]) -> Fidelity:
 
 def arrange_diners(items: Sequence[Item], table: Table, catalog: Catalog, seed: int,
                    say: Callable[[str], None], ask: Ask, sample: Sample,
-                   revise: Revise | None = None) -> Diners:
+                   revise: Revise | None = None, reach: Reach | None = None) -> Diners:
     """Every diner's setting (see the module doc). When no configuration of a diner's
-    setting fits their place, ``revise`` may give a revision of that distinct setting
-    (in its first diner's names); every diner is then sampled again. Raises
+    setting fits their place, or ``reach`` finds every joined configuration puts one of
+    their objects out of the robot's reach, ``revise`` may give a revision of that
+    distinct setting (in its first diner's names); every diner is then sampled again (out
+    of reach with no revision, the configurations stand: planning says why). Raises
     :class:`BadInput` when a diner's setting does not fit in their place."""
     check_fit(items, table)
     groups = diner_groups(items)
     seated = places(table, table.seats)
     distinct: dict[tuple[str, ...], tuple[tuple[Item, ...], Setting]] = {}
     while True:
-        settings, sampled = [], []
-        for k, (group, place) in enumerate(zip(groups, seated, strict=True)):
-            kinds = tuple(it.kind for it in group)
-            if kinds not in distinct:
-                base = items_from_names(kinds, catalog)
-                distinct[kinds] = (base, ask(base, place.box))
+        settings, sampled = _sample_all(groups, seated, distinct, catalog, seed, say, ask,
+                                        sample, revise, table)
+        if settings is None:
+            continue
+        m = min(len(s.configurations) for s in sampled)
+        configs = tuple(Configuration(tuple(
+            p for k, (s, place) in enumerate(zip(sampled, seated, strict=True))
+            for p in _to_table(s.configurations[c], place, k))) for c in range(m))
+        failure = None if reach is None or revise is None else reach(configs)
+        if failure is not None:
+            k = next(k for k, group in enumerate(groups)
+                     if any(it.name in failure.objects for it in group))
+            kinds = tuple(it.kind for it in groups[k])
             base, setting = distinct[kinds]
-            names = {b.name: g.name for b, g in zip(base, group, strict=True)}
-            mine = _renamed(setting, names)
-            say(f"sampling configurations for diner {k + 1} of {len(groups)}")
-            try:
-                one = sample(group, mine, place.box,
-                             lambda k=k: seeds.stream(seed, "sampler", k), place.region)
-            except NoArrangement as exc:
-                revised = None if revise is None else \
-                    revise(base, setting, place.box, _in_base_names(exc, names))
-                if revised is None:
-                    raise _no_fit(len(groups), table, k, place, exc) from None
+            names = {b.name: g.name for b, g in zip(base, groups[k], strict=True)}
+            revised = revise(base, setting, seated[k].box, _in_base_names(failure, names))
+            if revised is not None:
                 distinct[kinds] = (base, revised)
-                break
-            except Infeasible as exc:
+                continue
+        fid = tuple(_joined([s.fidelity[c] for s in sampled]) for c in range(m))
+        return Diners(tuple(settings), tuple(sampled), tuple(s for _, s in distinct.values()),
+                      configs, fid)
+
+
+def _sample_all(groups: Sequence[tuple[Item, ...]], seated: Sequence[Place],
+                distinct: dict[tuple[str, ...], tuple[tuple[Item, ...], Setting]],
+                catalog: Catalog, seed: int, say: Callable[[str], None], ask: Ask,
+                sample: Sample, revise: Revise | None, table: Table
+                ) -> tuple[list[Setting] | None, list[Sampled]]:
+    """Every diner's renamed setting and sample; ``(None, ...)`` when a diner's distinct
+    setting was revised on the way (``distinct`` holds the revision: sample them all
+    again)."""
+    settings, sampled = [], []
+    for k, (group, place) in enumerate(zip(groups, seated, strict=True)):
+        kinds = tuple(it.kind for it in group)
+        if kinds not in distinct:
+            base = items_from_names(kinds, catalog)
+            distinct[kinds] = (base, ask(base, place.box))
+        base, setting = distinct[kinds]
+        names = {b.name: g.name for b, g in zip(base, group, strict=True)}
+        mine = _renamed(setting, names)
+        say(f"sampling configurations for diner {k + 1} of {len(groups)}")
+        try:
+            one = sample(group, mine, place.box,
+                         lambda k=k: seeds.stream(seed, "sampler", k), place.region)
+        except NoArrangement as exc:
+            revised = None if revise is None else \
+                revise(base, setting, place.box, _in_base_names(exc, names))
+            if revised is None:
                 raise _no_fit(len(groups), table, k, place, exc) from None
-            settings.append(mine)
-            sampled.append(one)
-        else:
-            break
-    m = min(len(s.configurations) for s in sampled)
-    configs = tuple(Configuration(tuple(
-        p for k, (s, place) in enumerate(zip(sampled, seated, strict=True))
-        for p in _to_table(s.configurations[c], place, k))) for c in range(m))
-    fid = tuple(_joined([s.fidelity[c] for s in sampled]) for c in range(m))
-    return Diners(tuple(settings), tuple(sampled), tuple(s for _, s in distinct.values()),
-                  configs, fid)
+            distinct[kinds] = (base, revised)
+            return None, sampled
+        except Infeasible as exc:
+            raise _no_fit(len(groups), table, k, place, exc) from None
+        settings.append(mine)
+        sampled.append(one)
+    return settings, sampled
 
 
 def _no_fit(n: int, table: Table, k: int, place: Place, exc: Infeasible) -> BadInput:
@@ -199,12 +228,13 @@ def _no_fit(n: int, table: Table, k: int, place: Place, exc: Infeasible) -> BadI
 
 
 def _in_base_names(exc: NoArrangement, names: dict[str, str]) -> NoArrangement:
-    """``exc`` in the first diner's object names (``names`` maps them to this diner's)."""
+    """``exc`` (of its own class) in the first diner's object names (``names`` maps them
+    to this diner's)."""
     back = {mine: base for base, mine in names.items()}
-    why = exc.why
+    why, detail = exc.why, exc.detail
     for mine in sorted(back, key=len, reverse=True):
-        why = why.replace(mine, back[mine])
-    return NoArrangement(exc.detail, tuple(back.get(o, o) for o in exc.objects), why)
+        why, detail = why.replace(mine, back[mine]), detail.replace(mine, back[mine])
+    return type(exc)(detail, tuple(back.get(o, o) for o in exc.objects), why)
 
 
 def in_place_frames(placements: Sequence[Placement], table: Table

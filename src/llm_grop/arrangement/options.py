@@ -42,8 +42,9 @@ class ArrangeOptions:
     run; 0 re-prompts blindly on a contradiction, as the paper does; ``None``: as
     :func:`~llm_grop.arrangement.revision.rounds_for` says for the run's model.
     ``reach``: when given, a sampling whose every configuration puts an object out of the
-    robot's reach is a failure told to the LLM, while rounds are left (one setting only; a
-    table of several diners is not checked); ``None``: planning finds it.
+    robot's reach is a failure told to the LLM, while rounds are left (with several
+    diners, of the setting whose object it is, checked on the whole table's
+    configurations); ``None``: planning finds it.
     ``learned``: sentences learned from example settings (``--examples``;
     :mod:`llm_grop.arrangement.learning`), each with the settings it was read off; they
     apply as ``preference_pool``'s do, as relations of source ``learned``.

@@ -307,7 +307,9 @@ def arrange_items(request: str | Request, items: Sequence[Item], llm: CallLog,
             items, table, catalog, seed, say,
             lambda base, box: _symbolic(base, box, g, feedback),
             lambda its, st, box, rng, region: sample_setting(its, st, box, rng, options,
-                                                             region), revise)
+                                                             region), revise,
+            None if options.reach is None else
+            lambda configs: _out_of_reach(configs, options.reach))
         relations_all = tuple(r for s in several.settings for r in s.relations)
         warnings = tuple(w for s in several.distinct for w in s.warnings) + \
             tuple(w for s in several.sampled for w in s.warnings)
