@@ -27,7 +27,7 @@ from llm_grop.files.profiles import load_profile
 from llm_grop.geometry.obstacles import Obstacles
 from llm_grop.world.arrangement import Item
 from llm_grop.world.geometry2d import Pose2D
-from llm_grop.world.robot import Robot
+from llm_grop.world.robot import FINGER_THICKNESS_M, GRIP_CLEARANCE_M, Robot
 from llm_grop.world.scene import ObjectSource, Scene, SceneTable
 
 #: Smallest radius of the disc an object occupies on a supply table while it waits, metres;
@@ -37,9 +37,9 @@ OBJECT_RADIUS_M = 0.06
 OBJECT_GAP_M = 0.01
 #: Gap kept between two waiting objects' footprints on a crowded table (see
 #: ``_swept_spot``), metres: room for a finger of the open gripper beside an object it
-#: grasps (the pads open 1.5 cm past the object, and a finger with its pad is 2 cm thick),
-#: with 5 mm to spare.
-FINGER_ROOM_M = 0.04
+#: grasps (the pad's opening past the object and the finger's thickness), with 5 mm to
+#: spare.
+FINGER_ROOM_M = GRIP_CLEARANCE_M + FINGER_THICKNESS_M + 0.005
 #: Clearance between a waiting object's disc and its table's edge, metres.
 EDGE_MARGIN_M = 0.05
 #: Waiting objects lie at most this far, metres, from a table edge the robot can stand at,

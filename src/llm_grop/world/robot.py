@@ -6,6 +6,12 @@ from dataclasses import dataclass
 
 from llm_grop.errors import BadInput
 
+#: How far each of the gripper's pads opens past the side of the object it grasps, metres:
+#: the hand opens to the object's width plus twice this.
+GRIP_CLEARANCE_M = 0.015
+#: A finger's thickness with its pad, metres (``simulation/mujoco/assets/robot.xml``).
+FINGER_THICKNESS_M = 0.02
+
 
 @dataclass(frozen=True)
 class Robot:

@@ -31,6 +31,7 @@ from llm_grop.simulation.mujoco.tableware import MAX_OPENING_M
 from llm_grop.simulation.mujoco.world import World
 from llm_grop.simulation.mujoco.world_model import TRAY_TOP
 from llm_grop.world.plan import Reason
+from llm_grop.world.robot import GRIP_CLEARANCE_M
 
 #: Height of the pre-grasp and pre-place poses above the grasp (metres).
 APPROACH_M = 0.10
@@ -105,24 +106,24 @@ def pick(w: World, name: str, *, from_tray: bool = False) -> Attempt:
         return _no_ik(w, t0, candidates[0][0])
     q_at, q_above, width, via = plan
     w.grip_width = width
-    w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
+    w.set_fingers(min(width + 2 * GRIP_CLEARANCE_M, MAX_OPENING_M), 0.2)
     note = (w.move_arm(via) if via is not None else "") or w.move_arm(q_above) \
         or w.move_arm(q_at, speed_radps=0.6, at_surface=True)
     if note:
         return _abort(w, t0, note, via=via)
     w.set_fingers(0.0, 0.4)
     if not _grip(w, name):
-        w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
+        w.set_fingers(min(width + 2 * GRIP_CLEARANCE_M, MAX_OPENING_M), 0.2)
         return _abort(w, t0, "the pads do not squeeze it", "grasp_missed", via=via)
     w.hold(name)
     note = w.move_arm(q_above, speed_radps=0.6, at_surface=True) \
         or (w.move_arm(via) if via is not None else "") or w.move_arm(w.ik.carry())
     if note:
         # Put it back down: a failed pick never leaves the object in the hand.
-        w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
+        w.set_fingers(min(width + 2 * GRIP_CLEARANCE_M, MAX_OPENING_M), 0.2)
         return _abort(w, t0, note, via=via)
     if w.held != name:
-        w.set_fingers(min(width + 0.03, MAX_OPENING_M), 0.2)
+        w.set_fingers(min(width + 2 * GRIP_CLEARANCE_M, MAX_OPENING_M), 0.2)
         return _abort(w, t0, "it slipped from the pads while lifting", "grasp_missed",
                       via=via)
     return Attempt(True, w.d.time - t0)
@@ -229,7 +230,7 @@ def _put_down(w: World, t0: float, q_at: np.ndarray, q_above: np.ndarray,
         or w.move_arm(q_at, speed_radps=0.5, at_surface=True)
     if note:
         return _abort(w, t0, note, via=via)
-    w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.25)
+    w.set_fingers(min(w.grip_width + 2 * GRIP_CLEARANCE_M, MAX_OPENING_M), 0.25)
     w.move_arm(q_above, speed_radps=0.6, at_surface=True)
     if via is not None:
         w.move_arm(via)
@@ -248,7 +249,7 @@ def release(w: World) -> None:
         if low.ok:
             w.move_arm(low.q, at_surface=True)
             break
-    w.set_fingers(min(w.grip_width + 0.03, MAX_OPENING_M), 0.3)
+    w.set_fingers(min(w.grip_width + 2 * GRIP_CLEARANCE_M, MAX_OPENING_M), 0.3)
     w.move_arm(w.ik.carry(), at_surface=True)
 
 
