@@ -268,7 +268,7 @@ def one_line(errors: Sequence[Any], raw: Any = None, model: Any = None,
 
 class PreferencesBody(_Body):
     """``POST /v1/preferences``: learn a person's way of setting the table from example
-    settings, as ``llm-grop learn`` does."""
+    settings, as ``llm-grop learn --exact`` does (the LLM step is not taken)."""
 
     examples: list[dict[str, Any]] = Field(
         min_length=1, max_length=20,
