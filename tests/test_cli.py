@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -261,6 +264,61 @@ def test_staged_outputs_are_written_all_or_none(tmp_path: Path) -> None:
     assert json.loads(first.read_text()) == {"new": True}
     assert json.loads(second.read_text()) == {"two": 2}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "b.json"]
+
+
+def _read_fifo(path: Path) -> tuple[threading.Thread, list[bytes]]:
+    """A reader of the named pipe ``path``, started: what it read lands in the list."""
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(path.read_bytes()), daemon=True)
+    reader.start()
+    return reader, got
+
+
+def test_outputs_write_through_links_and_into_pipes(tmp_path: Path) -> None:
+    """A link stays a link (its target is replaced) and a pipe stays a pipe (written
+    into), whichever writer: ``--json /dev/stdout`` must never replace ``/dev/stdout``."""
+    from llm_grop.cli.options import StagedOutputs
+    from llm_grop.files.jsonio import write_json
+
+    target, link = tmp_path / "target.json", tmp_path / "link.json"
+    target.write_text("old\n")
+    link.symlink_to(target)
+    write_json(link, {"one": 1})
+    with StagedOutputs() as outputs:
+        outputs.write("json", link, lambda p: write_json(p, {"two": 2}))
+        outputs.commit()
+    assert link.is_symlink() and json.loads(target.read_text()) == {"two": 2}
+    fifo = tmp_path / "pipe.json"
+    os.mkfifo(fifo)
+    for write in (lambda: write_json(fifo, {"three": 3}), lambda: _staged(fifo)):
+        reader, got = _read_fifo(fifo)
+        write()
+        reader.join(10)
+        assert json.loads(got[0]) in ({"three": 3}, {"four": 4})
+        assert stat.S_ISFIFO(fifo.stat().st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "pipe.json",
+                                                          "target.json"]
+
+
+def _staged(path: Path) -> None:
+    from llm_grop.cli.options import StagedOutputs
+    from llm_grop.files.jsonio import write_json
+
+    with StagedOutputs() as outputs:
+        outputs.write("json", path, lambda p: write_json(p, {"four": 4}))
+        outputs.commit()
+
+
+def test_learn_writes_into_a_pipe_without_force(tmp_path: Path, capsys) -> None:
+    from learning_support import LEFT_HANDED, write_example
+
+    example = write_example(tmp_path / "left.json", LEFT_HANDED, 1)
+    fifo = tmp_path / "prefs.yaml"
+    os.mkfifo(fifo)
+    reader, got = _read_fifo(fifo)
+    assert main(["learn", str(example), "--out", str(fifo), "--exact", "-q"]) == 0
+    reader.join(10)
+    assert got[0].startswith(b"# Preferences learned") and stat.S_ISFIFO(fifo.stat().st_mode)
 
 
 def test_write_json_is_atomic_and_keeps_the_files_mode(tmp_path: Path) -> None:

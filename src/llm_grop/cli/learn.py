@@ -51,11 +51,11 @@ def learn(examples: tuple[Path, ...], out_path: Path, force: bool,
 
     from llm_grop.api import learn as learn_examples
     from llm_grop.cli.console import print_warnings
-    from llm_grop.files.jsonio import write_text
+    from llm_grop.files.jsonio import output_target, write_text
 
     # The output is checked before any example is read.
     check_outputs(out=out_path)
-    if out_path.exists() and not force:
+    if out_path.exists() and not force and not output_target(out_path)[1]:
         raise BadInput(f"--out {out_path}: already exists; give --force to replace it")
     if out_path.resolve() in {e.resolve() for e in examples}:
         raise BadInput(f"--out {out_path}: is one of the examples")

@@ -6,6 +6,8 @@ from __future__ import annotations
 import logging
 import os
 import secrets
+import shutil
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from types import TracebackType
@@ -14,6 +16,7 @@ from typing import Any, TypeVar
 import click
 
 from llm_grop.errors import BadInput
+from llm_grop.files.jsonio import output_target
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +80,10 @@ def _check_output(flag: str, path: Path) -> None:
         suffix, words = OUTPUT_SUFFIXES[flag]
         if path.suffix.lower() != suffix:
             raise BadInput(f"{name} {path}: {words}")
+    if output_target(path)[1]:  # a pipe or a terminal: written into, its directory untouched
+        if not os.access(path, os.W_OK):
+            raise BadInput(f"{name} {path}: the file is not writable")
+        return
     if not parent.is_dir():
         raise BadInput(f"{name} {path}: directory {parent} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
@@ -127,7 +134,9 @@ class StagedOutputs:
     """
 
     def __init__(self) -> None:
-        self._staged: dict[Path, tuple[str, Path]] = {}
+        # Per output: its flag, the temporary file, where it lands and whether it is
+        # streamed there (:func:`~llm_grop.files.jsonio.output_target`).
+        self._staged: dict[Path, tuple[str, Path, Path, bool]] = {}
 
     def __enter__(self) -> StagedOutputs:
         return self
@@ -138,11 +147,13 @@ class StagedOutputs:
 
     def path(self, flag: str, final: Path) -> Path:
         """A fresh temporary path beside ``final``, moved to ``final`` at the commit."""
+        target, streamed = output_target(final)
         # Short whatever the output's name, and with its suffix (a format check reads it).
         suffix = final.suffix if len(final.suffix) <= _SUFFIX_CHARS else ""
-        tmp = final.with_name(f".{final.stem[:_STEM_CHARS]}.{os.getpid()}-"
-                              f"{secrets.token_hex(4)}.part{suffix}")
-        self._staged[final] = (flag, tmp)
+        name = f".{final.stem[:_STEM_CHARS]}.{os.getpid()}-{secrets.token_hex(4)}.part{suffix}"
+        # A pipe or a terminal is written into at the commit, from a file staged apart.
+        tmp = Path(tempfile.gettempdir()) / name if streamed else target.with_name(name)
+        self._staged[final] = (flag, tmp, target, streamed)
         return tmp
 
     def write(self, flag: str, final: Path | None, writer: Callable[[Path], object]) -> None:
@@ -162,11 +173,16 @@ class StagedOutputs:
 
     def commit(self) -> None:
         """Move every written file into place."""
-        for final, (flag, tmp) in list(self._staged.items()):
+        for final, (flag, tmp, target, streamed) in list(self._staged.items()):
             if not tmp.exists():
                 continue
             try:
-                os.replace(tmp, final)
+                if streamed:
+                    with tmp.open("rb") as src, open(final, "wb") as out:
+                        shutil.copyfileobj(src, out)
+                    tmp.unlink()
+                else:
+                    os.replace(tmp, target)
             except OSError as exc:
                 raise BadInput(f"{_flag(flag)} {final}: cannot write ({exc.strerror})") \
                     from None
@@ -174,7 +190,7 @@ class StagedOutputs:
 
     def discard(self) -> None:
         """Remove the temporary files not yet committed (never a user's own file)."""
-        for _, tmp in self._staged.values():
+        for _, tmp, _, _ in self._staged.values():
             tmp.unlink(missing_ok=True)
         self._staged.clear()
 

@@ -46,14 +46,37 @@ def write_text(path: str | Path, text: str) -> None:
     write_bytes(path, text.encode("utf-8"))
 
 
+def output_target(path: Path) -> tuple[Path, bool]:
+    """Where a file written to ``path`` lands, and whether it is streamed into it rather
+    than renamed over it: a symbolic link is written through (its target is replaced, the
+    link kept), and an existing file that is not a regular one (a terminal, a pipe,
+    ``/dev/stdout``) is written into as it is, never replaced."""
+    try:
+        mode = path.stat().st_mode  # through a link
+    except OSError:
+        return Path(os.path.realpath(path)), False  # a link to nothing yet: its target
+    if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+        return path, True
+    return Path(os.path.realpath(path)), False
+
+
 def write_bytes(path: str | Path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically, as :func:`write_json` does: a temporary file
     of its own beside it (so concurrent writers of one path never meet), synced, then
-    renamed over it."""
+    renamed over it (through a link, and straight into a pipe or a terminal:
+    :func:`output_target`)."""
     path = Path(path)
+    target, streamed = output_target(path)
+    if streamed:
+        try:
+            with open(path, "wb") as f:
+                f.write(data)
+        except OSError as exc:
+            raise BadInput(f"{path}: cannot write ({exc.strerror or exc})") from None
+        return
     try:
-        fd, name = tempfile.mkstemp(prefix=f".{path.name[:_TMP_NAME_CHARS]}.", suffix=".tmp",
-                                    dir=path.parent)
+        fd, name = tempfile.mkstemp(prefix=f".{target.name[:_TMP_NAME_CHARS]}.",
+                                    suffix=".tmp", dir=target.parent)
     except OSError as exc:
         raise BadInput(f"{path}: cannot write ({exc.strerror or exc})") from None
     tmp = Path(name)
@@ -62,8 +85,8 @@ def write_bytes(path: str | Path, data: bytes) -> None:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
-        os.chmod(tmp, _mode_for(path))
-        os.replace(tmp, path)
+        os.chmod(tmp, _mode_for(target))
+        os.replace(tmp, target)
     except OSError as exc:
         tmp.unlink(missing_ok=True)
         raise BadInput(f"{path}: cannot write ({exc.strerror or exc})") from None
