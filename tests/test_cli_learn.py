@@ -173,3 +173,12 @@ def test_learn_generalises_with_a_model_from_a_server(tmp_path: Path, examples, 
     # The rule takes the examples' spacing (their median gap, centimetres).
     assert re.search(r"^  - the water cup \d+(\.\d)? cm above the dinner plate  "
                      r"# a rule by qwen2\.5:7b$", out.read_text(), re.M)
+
+
+def test_a_preference_against_the_examples_names_both(tmp_path: Path, examples,
+                                                      capsys) -> None:
+    assert main(["arrange", SETTING, "--llm", "replay", "--replay", str(NO_CALLS),
+                 *(a for e in examples for a in ("--examples", str(e))),
+                 "--prefer", "the dinner fork to the left of the dinner plate"]) == 2
+    error = one_line_error(capsys)
+    assert "the preferences and the examples contradict each other" in error, error

@@ -371,9 +371,9 @@ def learn(examples: Sequence[str | PathLike[str] | Mapping[str, Any]],
         s, choice = resolve_llm(s)
         if choice is not None and choice.weak:
             return replace(learned, warnings=learned.warnings + (
-                f"no capable model to generalise with ({choice.why}): only the exact "
-                "sentences are learned; start Ollama, llama.cpp's llama-server or vLLM, or "
-                "pass --base-url URL",))
+                "no capable model to generalise with: only the exact sentences are "
+                "learned; start Ollama, llama.cpp's llama-server or vLLM, or pass "
+                f"--base-url URL ({choice.why})",))
         job = replace(job, settings=s)
     return with_rules(learned, job.log(), catalog, s.seed, sampling(s))
 

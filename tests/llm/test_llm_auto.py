@@ -156,14 +156,21 @@ def test_fallback_reason_is_printed_once() -> None:
 
     from llm_grop.cli.console import print_llm
     from llm_grop.llm.embedded import DEFAULT_MODEL
+    from llm_grop.llm.record import LLMCallRecord
     from llm_grop.world.llmlog import LLMSummary
 
     why = "no OpenAI-compatible server answered on 127.0.0.1 (ports 11434)"
     out, err = StringIO(), StringIO()
-    print_llm(LLMSummary("embedded", DEFAULT_MODEL, (), why),
+    call = LLMCallRecord("embedded", DEFAULT_MODEL, "Where?", "Place it.", 0.5)
+    print_llm(LLMSummary("embedded", DEFAULT_MODEL, (call,), why),
               Console(file=out, width=200), Console(file=err, width=200))
     assert "chosen by --llm auto: see the note" in out.getvalue()
     assert why not in out.getvalue() and err.getvalue().count(why) == 1
+    # Preferences that relate every object leave the model nothing to answer: no note.
+    out, err = StringIO(), StringIO()
+    print_llm(LLMSummary("embedded", DEFAULT_MODEL, (), why),
+              Console(file=out, width=200), Console(file=err, width=200))
+    assert f"(auto: {why}), 0 calls" in out.getvalue() and err.getvalue() == ""
     served = StringIO()
     print_llm(LLMSummary("openai", "local-model", (), "a server answered on 127.0.0.1:8080"),
               Console(file=served, width=200))

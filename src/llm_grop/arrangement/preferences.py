@@ -206,14 +206,19 @@ _FROM = {"request": "the request", "preference": "a preference", "llm": "the LLM
          "learned": "the examples"}
 
 
+#: Who stated the relations that contradict each other, in the order a message names them.
+_WHOSE = {"request": "the request's relations", "preference": "the preferences",
+          "learned": "the examples"}
+
+
 def contradiction(conflict: Sequence[Relation | Choice]) -> str:
     """The one-line message for stated relations that contradict each other (clingo's
     minimal conflict), each in the words it was stated in and saying where it came from."""
     sources = {c.options[0][0].source if isinstance(c, Choice) else c.source
                for c in conflict}
-    whose = "preferences" if sources == {"preference"} else \
-        "the request's relations" if sources == {"request"} else \
-        "the request's relations and the preferences"
+    whose = "preferences" if sources == {"preference"} else " and ".join(
+        words for source, words in _WHOSE.items() if source in sources) \
+        or "the stated relations"
     said = []
     for c in conflict:
         first = c.options[0][0] if isinstance(c, Choice) else c

@@ -167,12 +167,13 @@ def final_rating(result: RunResult) -> Rating:
 
 def print_llm(llm: LLMSummary, console: Console, err: Console | None = None) -> None:
     """The LLM's line, and on ``err`` (else ``console``) a note when ``--llm auto`` fell
-    back to the small embedded model."""
+    back to the small embedded model and it answered (no note when the preferences or the
+    examples left it nothing to answer)."""
     from llm_grop.llm.auto import fallback_note
     from llm_grop.llm.embedded import DEFAULT_MODEL
 
     fell_back = llm.backend == "embedded" and llm.model == DEFAULT_MODEL \
-        and llm.chosen_by is not None
+        and llm.chosen_by is not None and bool(llm.calls)
     console.print(llm_line(llm, noted=fell_back))
     if fell_back:
         (err or console).print(f"note: {fallback_note(llm.chosen_by)}", markup=False,
