@@ -403,10 +403,43 @@ def test_arrangements_and_plans_take_example_settings(server: Server) -> None:
     assert bad.status_code == 422 and bad.json()["error"].startswith("example 1: ")
 
 
+def test_preferences_generalised_by_the_servers_llm_as_a_job(tmp_path: Path,
+                                                               chat_server) -> None:
+    """With ``generalise``, the server's LLM gives rules for the objects the examples do
+    not show (a real local server answering as a model would), as ``llm-grop learn``."""
+    from learning_support import LEFT_HANDED, arranged
+
+    chat_server.reply = lambda body: "Place the water cup above and to the left of the " \
+                                     "dinner plate."
+    examples = [arranged(LEFT_HANDED, seed) for seed in (1, 2)]
+    s = start_server(tmp_path / "jobs.sqlite", "--llm", "openai", "--base-url",
+                     chat_server.url, "--model", "qwen2.5:7b")
+    try:
+        with s.client() as c:
+            answer = c.post("/v1/preferences", json={"examples": examples, "seed": 3,
+                                                     "generalise": True, "llm": "openai"})
+            assert answer.status_code == 200, answer.text
+            data = answer.json()
+            again = c.get(data["permalink"])
+            exact = c.post("/v1/preferences", json={"examples": examples}).json()
+            bad = c.post("/v1/preferences", json={"examples": examples, "generalise": True,
+                                                  "llm": "embedded"})
+    finally:
+        s.stop()
+    openapi_validator("PreferencesAnswer").validate(data)
+    (rule,) = [p for p in data["preferences"] if p["examples"] == ["a rule by qwen2.5:7b"]]
+    assert rule["sentence"].startswith("the water cup ") and rule["sentence"].endswith(
+        " cm above and to the left of the dinner plate")
+    assert data["permalink"] == f"/v1/preferences/{data['id']}" and again.json() == data
+    assert [p for p in data["preferences"] if p != rule] == exact["preferences"]
+    assert exact["id"] is None and len(chat_server.requests) == 1
+    assert bad.status_code == 422 and bad.json()["error"].startswith("llm: ")
+
+
 @pytest.mark.parametrize(("body", "needle"), [
     ({"examples": []}, "examples: must not be empty"),
     ({"examples": [{}]}, "example 1: "),
-    ({"examples": [{"objects": []}], "seed": 1}, "seed: unknown key"),
+    ({"examples": [{"objects": []}], "sead": 1}, "sead: unknown key"),
 ])
 def test_bad_examples_are_one_line(server: Server, body: dict, needle: str) -> None:
     with server.client() as c:

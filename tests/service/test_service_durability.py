@@ -174,3 +174,38 @@ def test_each_thread_has_a_connection_and_a_waiting_writer_holds_up_no_reader(
     writer.join(timeout=30)
     assert len(submitted) == 1 and store.get(submitted[0]) is not None
     store.close()
+
+
+def test_a_database_of_the_first_schema_is_migrated_keeping_every_job(tmp_path: Path
+                                                                      ) -> None:
+    """Schema 2 adds the ``learn`` kind by rebuilding the tables: a job's files and events
+    must survive it (dropping the jobs table first would cascade them away)."""
+    from llm_grop import database
+    from llm_grop.service.jobs import JOBS
+
+    db = tmp_path / "jobs.sqlite"
+    conn = database.connect(JOBS, db, create=True, upto=1)
+    conn.execute("INSERT INTO jobs (id, kind, body, client, priority, state, created, result) "
+                 "VALUES ('r1', 'run', '{}', 'c', 1, 'done', 1.0, '{\"run\": {}}')")
+    conn.execute("INSERT INTO files VALUES ('r1', 'table.png', 'image/png', x'89504e47')")
+    conn.execute("INSERT INTO events VALUES ('r1', 1, 1.0, 'executing the plan')")
+    with pytest.raises(sqlite3.IntegrityError):
+        conn.execute("INSERT INTO jobs (id, kind, body, client, priority, state, created) "
+                     "VALUES ('l0', 'learn', '{}', 'c', 0, 'queued', 1.0)")
+    conn.close()
+    store = JobStore(db)
+    try:
+        job = store.get("r1")
+        assert job is not None and (job.kind, job.state, job.result) == ("run", "done",
+                                                                         {"run": {}})
+        assert store.file("r1", "table.png") == ("image/png", b"\x89PNG")
+        assert [m for _, _, m in store.events("r1")] == ["executing the plan"]
+        learn = store.submit("learn", {"examples": []}, "c", queue=10, per_client=10)
+        assert store.get(learn).kind == "learn"  # type: ignore[union-attr]
+        with store.connection() as c:
+            assert c.execute("PRAGMA foreign_key_check").fetchall() == []
+            c.execute("DELETE FROM jobs WHERE id = 'r1'")  # its files and events go with it
+            assert c.execute("SELECT count(*) FROM files").fetchone()[0] == 0
+            assert c.execute("SELECT count(*) FROM events").fetchone()[0] == 0
+    finally:
+        store.close()

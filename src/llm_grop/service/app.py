@@ -37,7 +37,6 @@ from llm_grop.service.models import (
     ErrorAnswer,
     Info,
     JobAnswer,
-    LearnedPreference,
     Pending,
     PlanAnswer,
     PlanBody,
@@ -45,6 +44,7 @@ from llm_grop.service.models import (
     PreferencesBody,
     RunBody,
     one_line,
+    preferences_answer,
 )
 from llm_grop.service.playground import add_playground
 from llm_grop.service.service import Service, StillRunning
@@ -134,7 +134,8 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
     @app.exception_handler(StillRunning)
     async def still_running(_: Request, exc: StillRunning) -> Response:
-        prefix = {"arrange": "/v1/arrangements/", "plan": "/v1/plans/"}[exc.job.kind]
+        prefix = {"arrange": "/v1/arrangements/", "plan": "/v1/plans/",
+                  "learn": "/v1/preferences/"}[exc.job.kind]
         link = prefix + exc.job.id
         return JSONResponse({"id": exc.job.id, "state": exc.job.state, "permalink": link},
                             status_code=202, headers={"Location": link})
@@ -250,17 +251,22 @@ def create_app(config: ServiceConfig, *, workers: bool = True) -> FastAPI:
 
     @app.post("/v1/preferences", response_model=PreferencesAnswer, responses=_ERRORS,
               summary="Learn preferences from example table settings")
-    def post_preferences(body: PreferencesBody) -> PreferencesAnswer:
+    async def post_preferences(body: PreferencesBody, request: Request) -> PreferencesAnswer:
         from llm_grop.arrangement.learning import learn
         from llm_grop.world.catalog import Catalog
 
-        learned = learn(body.examples, Catalog.load())
-        return PreferencesAnswer(
-            preferences=[LearnedPreference(sentence=s.sentence, gap_cm=s.gap_cm,
-                                           spread_cm=s.spread_cm, examples=list(s.sources))
-                         for s in learned.sentences],
-            not_learned=[c.message() for c in learned.contradictions],
-            warnings=list(learned.warnings), file=learned.preference_file())
+        if body.generalise:  # an LLM call: queued as a job, as an arrangement is
+            job_id = await run_in_threadpool(service.submit, "learn", body, client(request))
+            return service.preferences(await service.finished(job_id))
+        return preferences_answer(await run_in_threadpool(learn, body.examples,
+                                                          Catalog.load()))
+
+    @app.get("/v1/preferences/{job_id}", response_model=PreferencesAnswer,
+             responses=_ERRORS, summary="Preferences learned with the LLM's step, at their "
+                                        "permalink")
+    async def get_preferences(job_id: str) -> PreferencesAnswer:
+        job = await run_in_threadpool(service.get, job_id, "learn")
+        return service.preferences(await service.finished(job.id))
 
     add_playground(app, service)
     return app

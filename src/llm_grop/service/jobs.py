@@ -27,7 +27,7 @@ from llm_grop.database import transaction
 
 JOBS = database.Kind("llm_grop.service", 0x4C475253, "service database",
                      "'llm-grop serve' makes one")
-Kind = Literal["arrange", "plan", "run"]
+Kind = Literal["arrange", "plan", "run", "learn"]
 State = Literal["queued", "running", "done", "failed", "cancelled"]
 TERMINAL: frozenset[str] = frozenset({"done", "failed", "cancelled"})
 #: Attempts a job gets when its worker or the server dies under it; then it fails.
@@ -35,7 +35,7 @@ MAX_ATTEMPTS = 3
 #: Ended jobs deleted per transaction when old ones are pruned (their videos with them).
 PRUNE_BATCH = 20
 #: Queue order: answers a client waits for go before runs.
-PRIORITY: dict[str, int] = {"arrange": 0, "plan": 0, "run": 1}
+PRIORITY: dict[str, int] = {"arrange": 0, "plan": 0, "learn": 0, "run": 1}
 #: Connections a store has open at most (its calls wait for one while all are in use).
 CONNECTIONS = 16
 

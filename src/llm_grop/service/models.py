@@ -5,7 +5,7 @@ the OpenAPI document (``docs/schema/openapi.json``)."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StrictBool, StrictInt
 
@@ -15,6 +15,9 @@ from llm_grop.datafile import problem_line
 from llm_grop.settings import DEFAULTS, RunSettings, help_text
 from llm_grop.world.request import MAX_REQUEST_CHARS
 from llm_grop.world.table import MAX_TABLE_SIDE_M, MIN_TABLE_SIDE_M, Table
+
+if TYPE_CHECKING:
+    from llm_grop.arrangement.learning import Learning
 
 
 def setting(name: str, base: Any, *limits: Any) -> Any:
@@ -268,12 +271,20 @@ def one_line(errors: Sequence[Any], raw: Any = None, model: Any = None,
 
 class PreferencesBody(_Body):
     """``POST /v1/preferences``: learn a person's way of setting the table from example
-    settings, as ``llm-grop learn --exact`` does (the LLM step is not taken)."""
+    settings, as ``llm-grop learn`` does: exactly (``--exact``), or with ``generalise`` as
+    a job that asks the server's LLM for rules for the objects the examples do not show."""
 
     examples: list[dict[str, Any]] = Field(
         min_length=1, max_length=20,
         description="table settings: each the contract's arrangement JSON, or a run JSON "
                     "(its `final`, what was set); one or several diners")
+    generalise: StrictBool = Field(
+        False, description="also ask the LLM where the same person would put the catalog's "
+                           "objects the examples do not show (one call; a job, answered "
+                           "when done or with 202 and its permalink)")
+    llm: Name | None = Field(None, description="with generalise: one of the server's "
+                                               "backends (GET /v1/info); default: its first")
+    seed: setting("seed", StrictInt) = described("seed")
 
 
 class LearnedPreference(BaseModel):
@@ -296,3 +307,16 @@ class PreferencesAnswer(BaseModel):
     not_learned: list[str]
     warnings: list[str]
     file: str
+    id: str | None = Field(None, description="with generalise: the job's id")
+    permalink: str | None = Field(None, description="with generalise: where the answer "
+                                                    "stays")
+
+
+def preferences_answer(learned: Learning) -> PreferencesAnswer:
+    """The answer for a :class:`~llm_grop.arrangement.learning.Learning`."""
+    return PreferencesAnswer(
+        preferences=[LearnedPreference(sentence=s.sentence, gap_cm=s.gap_cm,
+                                       spread_cm=s.spread_cm, examples=list(s.sources))
+                     for s in learned.sentences],
+        not_learned=[c.message() for c in learned.contradictions],
+        warnings=list(learned.warnings), file=learned.preference_file())

@@ -19,6 +19,8 @@ from llm_grop.service.models import (
     JobAnswer,
     PlanAnswer,
     PlanBody,
+    PreferencesAnswer,
+    PreferencesBody,
     RunBody,
     reading,
 )
@@ -55,12 +57,15 @@ class Service:
         assert self.store is not None, "the app was made without its workers"
         return self.store
 
-    def check(self, body: ArrangeBody | PlanBody) -> None:
+    def check(self, body: ArrangeBody | PlanBody | PreferencesBody) -> None:
         """Refuse what is plainly wrong before a job is queued: a request over the
         server's length, a backend, method or simulator it does not offer."""
         from llm_grop.api import available_methods, available_simulators
         from llm_grop.service.tasks import check_plugin_options
 
+        if isinstance(body, PreferencesBody):
+            self.config.backend(body.llm)
+            return
         text = body.request or ""
         limit = self.config.limits.request_chars
         if len(text) > limit:
@@ -75,7 +80,8 @@ class Service:
                                f"from {', '.join(available_simulators())}")
         check_plugin_options(body)
 
-    def submit(self, kind: Kind, body: ArrangeBody | PlanBody, client: str) -> str:
+    def submit(self, kind: Kind, body: ArrangeBody | PlanBody | PreferencesBody,
+               client: str) -> str:
         """Queue a checked job for ``client`` (its address); its id. 429 when the queue is
         full; :class:`Unwritable` (503) while the disk is full or read-only."""
         self.check(body)
@@ -132,6 +138,12 @@ class Service:
                           warnings=list(doc.warnings), picture=f"/v1/files/{job.id}/table.png",
                           room_picture=f"/v1/files/{job.id}/room.png",
                           permalink=f"/v1/plans/{job.id}")
+
+    def preferences(self, job: Job) -> PreferencesAnswer:
+        """An ended learning job's answer (its failure as a refusal)."""
+        answer = PreferencesAnswer.model_validate(_result(job)["preferences"])
+        return answer.model_copy(update={"id": job.id,
+                                         "permalink": f"/v1/preferences/{job.id}"})
 
     def run(self, job: Job) -> JobAnswer:
         """A run job as it stands."""

@@ -16,7 +16,13 @@ from llm_grop.errors import BadInput
 from llm_grop.llm.base import LLM, CallLog
 from llm_grop.llm.registry import create_llm
 from llm_grop.service.config import ServiceConfig
-from llm_grop.service.models import ArrangeBody, PlanBody, RunBody
+from llm_grop.service.models import (
+    ArrangeBody,
+    PlanBody,
+    PreferencesBody,
+    RunBody,
+    preferences_answer,
+)
 from llm_grop.settings import RunSettings
 from llm_grop.world.table import Table
 
@@ -54,11 +60,13 @@ class Backends:
 
 def perform(kind: str, body: dict[str, Any], config: ServiceConfig, llms: Backends,
             on_event: Callable[[str], None]) -> tuple[dict[str, Any], Files]:
-    """Do the job ``kind`` (``arrange``, ``plan`` or ``run``) for the request ``body``:
+    """Do the job ``kind`` (``arrange``, ``plan``, ``run`` or ``learn``) for the ``body``:
     its result JSON and files. Raises the project's errors for bad input (422) and
     nothing feasible (409)."""
     if kind == "arrange":
         return _arrange(ArrangeBody.model_validate(body), config, llms, on_event)
+    if kind == "learn":
+        return _learn(PreferencesBody.model_validate(body), llms, on_event)
     if kind == "plan":
         return _plan(PlanBody.model_validate(body), config, llms, on_event)
     return _run(RunBody.model_validate(body), config, llms, on_event)
@@ -144,6 +152,18 @@ def _arrange(body: ArrangeBody, config: ServiceConfig, llms: Backends,
     _check_size(len(result.arrangement.placements), config)
     return ({"arrangement": arrangement_to_dict(result.arrangement)},
             _table_pictures(result.arrangement, config.scratch))
+
+
+def _learn(body: PreferencesBody, llms: Backends, on_event: Callable[[str], None]
+           ) -> tuple[dict[str, Any], Files]:
+    """The preferences the body's examples teach, generalised by the server's LLM."""
+    from llm_grop.api import learn
+    from llm_grop.world.catalog import Catalog
+
+    on_event("learning from the examples, then asking the LLM for rules")
+    learned = learn(body.examples, catalog=Catalog.load(), generalise=True,
+                    llm=llms.log(body.llm), seed=body.seed)
+    return {"preferences": preferences_answer(learned).model_dump(mode="json")}, {}
 
 
 def _table_pictures(arrangement: Any, scratch: Path) -> Files:
