@@ -29,7 +29,8 @@ from dataclasses import replace
 
 from llm_grop import seeds
 from llm_grop.arrangement import consistency, relations
-from llm_grop.arrangement.learning import Learned, Learning, phrase, round_cm
+from llm_grop.arrangement.learning import Learned, Learning
+from llm_grop.arrangement.phrasing import phrase, round_cm
 from llm_grop.language.answer_reader import parse_relations
 from llm_grop.llm.base import CallLog, SamplingParams
 from llm_grop.world.catalog import Catalog
