@@ -140,12 +140,16 @@ def test_a_started_cluster_runs_on_loopback_and_dies_with_a_killed_driver(
     out = tmp_path / "killed"
     # Without the tests' own loopback switch: the executor must set it itself.
     env = {k: v for k, v in os.environ.items() if k != RAY_LOOPBACK_SWITCH}
-    driver = subprocess.Popen([sys.executable, "-m", "llm_grop", *BASE, "--out", str(out),
-                               "--executor", "ray", "--workers", "1"], env=env,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # Its one-line error is kept: a driver that ends before its first row says why.
+    said = tmp_path / "driver.err"
+    with said.open("wb") as err:
+        driver = subprocess.Popen([sys.executable, "-m", "llm_grop", *BASE, "--out",
+                                   str(out), "--executor", "ray", "--workers", "1"], env=env,
+                                  stdout=subprocess.DEVNULL, stderr=err)
     deadline = time.monotonic() + 180
     while not _rows(out):
-        assert driver.poll() is None and time.monotonic() < deadline
+        assert driver.poll() is None and time.monotonic() < deadline, \
+            f"the driver ended ({driver.poll()}) with no row: {said.read_text()[-2000:]}"
         time.sleep(0.05)
     started = {pid: cmd for pid, cmd in _ray_processes().items() if pid not in before}
     assert started, "the driver should have started a Ray cluster"
